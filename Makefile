@@ -1,0 +1,51 @@
+# vi_ekf_slam — the two commands users need, and a few more for developers.
+#   make demo   installs what is missing, builds, runs the main job, prints a table
+#   make test   installs what is missing, builds, runs every test (non-zero exit on failure)
+SHELL := /bin/bash
+.SHELLFLAGS := -eo pipefail -c
+# catkin, rostest and ROS Python live in Debian's /usr/bin python; the default python3 is a
+# pyenv build without ROS modules.
+export PATH := /usr/bin:/bin:/usr/sbin:/sbin:$(PATH)
+
+ROOT     := $(CURDIR)
+WS       ?= $(ROOT)/.catkin_ws
+DATA_DIR ?= $(abspath $(ROOT)/../shared/data)
+JOBS     ?= $(shell nproc)
+export DATA_DIR
+DEVEL    := $(WS)/devel
+BIN      := $(DEVEL)/lib/vi_ekf_slam
+CATKIN   := cd $(WS) && catkin_make -j$(JOBS) -DCMAKE_BUILD_TYPE=Release -DDATA_DIR=$(DATA_DIR)
+
+.PHONY: all deps workspace build test demo clean help
+
+all: build
+
+help:
+	@echo "make demo   - install, build, run the main job (results table + plots)"
+	@echo "make test   - install, build, run all tests (non-zero exit on failure)"
+	@echo "make build  - install missing packages and build in $(WS)"
+	@echo "make clean  - remove the build workspace"
+
+deps:
+	@bash tools/install_deps.sh
+
+# The catkin workspace lives outside the sources (git-ignored); its src/ links back here.
+workspace:
+	@mkdir -p $(WS)/src
+	@ln -sfn $(ROOT) $(WS)/src/vi_ekf_slam
+
+build: deps workspace
+	$(CATKIN)
+
+test: build
+	$(CATKIN) tests
+	@rm -rf $(WS)/build/test_results
+	$(CATKIN) run_tests -j1 | tail -n 200
+	@echo "================================ test summary ================================"
+	cd $(WS) && catkin_test_results build/test_results
+
+demo: build
+	$(BIN)/vi_ekf_slam_simulate_short
+
+clean:
+	rm -rf $(WS)

@@ -1,0 +1,13 @@
+// Chi-square distribution functions for gating (2 dof per observation) and NEES bands (6*M dof).
+// Hand-written because the core may only depend on Eigen and OpenCV: the regularized incomplete
+// gamma function (series / continued fraction, Numerical Recipes 6.2) and a bisection inverse.
+#pragma once
+
+namespace vi_ekf_slam {
+
+/// P(X <= x) for X ~ chi^2(dof).
+double chiSquaredCdf(double x, double dof);
+/// x such that P(X <= x) = p, for 0 < p < 1.
+double chiSquaredQuantile(double p, double dof);
+
+}  // namespace vi_ekf_slam

@@ -1,0 +1,85 @@
+// The estimator facade: an IMU buffer, the filter state, and the per-image sequence of the
+// paper (propagate -> update -> new landmarks -> composition), for any mechanization.
+// ROS-free; the ROS node, the simulator study and the tools all drive this class.
+#pragma once
+
+#include <deque>
+#include <string>
+#include <unordered_map>
+#include <vector>
+
+#include "vi_ekf_slam/core/camera_model.h"
+#include "vi_ekf_slam/core/ekf_slam_config.h"
+#include "vi_ekf_slam/core/navigation_output.h"
+#include "vi_ekf_slam/core/types.h"
+
+namespace vi_ekf_slam {
+
+struct FrameResult {
+  bool processed = false;
+  std::string error;  ///< why the frame was not processed
+  UpdateResult update;
+  std::vector<std::int64_t> new_ids;
+  std::vector<std::int64_t> removed_ids;
+  bool composed = false;
+};
+
+class EkfSlam {
+ public:
+  /// Throws std::invalid_argument with every problem if the configuration is impossible.
+  EkfSlam(const EkfSlamConfig& config, const CameraModel& camera, const CameraExtrinsics& T_b_c);
+
+  const EkfSlamConfig& config() const { return config_; }
+  const CameraModel& camera() const { return camera_; }
+  const CameraExtrinsics& extrinsics() const { return T_b_c_; }
+
+  /// Starts the filter at a known pose, velocity and biases in {n} at initial.timestamp; the
+  /// covariance comes from config().initial. IMU samples buffered so far are kept.
+  void initialize(const NavState& initial);
+  bool initialized() const { return initialized_; }
+  /// Forgets state, map and IMU buffer.
+  void reset();
+
+  /// Buffers one IMU sample. Returns false (and ignores it) if it is non-finite or not newer
+  /// than the previous one.
+  bool addImu(const ImuData& imu);
+  /// Integrates the buffered IMU up to time t. False if the buffer does not reach t.
+  bool propagateTo(double t);
+  /// Latest buffered IMU time (or -inf).
+  double latestImuTime() const;
+
+  /// Propagates to the image time, updates with known landmarks, adds new ones and composes.
+  FrameResult processFrame(const CameraFrame& frame);
+
+  /// Converts the running filter to another mechanization, keeping the map.
+  void setMechanization(Mechanization m);
+  Mechanization mechanization() const { return state_.mechanization(); }
+  /// Runs the composition step now (sensor-centric only).
+  void composeNow();
+
+  NavState navState() const { return vi_ekf_slam::navState(state_); }
+  std::vector<NavLandmark> landmarks() const { return navLandmarks(state_); }
+  const FilterState& state() const { return state_; }
+  FilterState& mutableState() { return state_; }
+
+  int compositions() const { return compositions_; }
+  int imuGaps() const { return imu_gaps_; }
+
+ private:
+  void removeLandmarksById(const std::vector<std::int64_t>& ids);
+  bool initializeLandmark(const FeatureObservation& obs);
+  bool shouldCompose(int new_landmarks) const;
+
+  EkfSlamConfig config_;
+  CameraModel camera_;
+  CameraExtrinsics T_b_c_;
+  Vec3 g_n_;
+  FilterState state_;
+  bool initialized_ = false;
+  std::deque<ImuData> imu_;
+  std::unordered_map<std::int64_t, double> last_seen_;
+  int compositions_ = 0;
+  int imu_gaps_ = 0;
+};
+
+}  // namespace vi_ekf_slam

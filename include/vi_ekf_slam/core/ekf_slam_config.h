@@ -1,0 +1,59 @@
+// Every setting of the estimator, with units in the names or comments, and its validation.
+#pragma once
+
+#include <string>
+
+#include "vi_ekf_slam/core/ekf_update.h"
+#include "vi_ekf_slam/core/imu_propagation.h"
+#include "vi_ekf_slam/core/landmark_initialization.h"
+#include "vi_ekf_slam/core/state_layout.h"
+
+namespace vi_ekf_slam {
+
+/// When the composition step runs (sensor_centric_composition only).
+enum class CompositionTrigger {
+  kNewLandmarks,  ///< paper: when more than `composition_new_landmarks` were added in one update
+  kEveryUpdate,   ///< after every image
+  kNever,
+};
+std::string toString(CompositionTrigger t);
+
+/// How a new landmark enters the state.
+enum class LandmarkInitMethod {
+  kFixedDepth,  ///< paper: fixed depth along the first ray, large variance along it
+};
+std::string toString(LandmarkInitMethod m);
+
+/// Initial standard deviations. World-centric: they describe the registration error of the
+/// body pose in {n}. Sensor-centric: the body pose in {s} is exact (zero), the same numbers go
+/// to p_n_s and q_n_s.
+struct InitialUncertainty {
+  double position_m = 0.05;
+  double velocity_mps = 0.05;
+  double roll_pitch_rad = 0.0175;  ///< ~1 deg
+  double yaw_rad = 0.035;          ///< ~2 deg
+  double accel_bias_mps2 = 0.05;
+  double gyro_bias_radps = 0.002;
+};
+
+struct EkfSlamConfig {
+  Mechanization mechanization = Mechanization::kSensorCentricComposition;
+  CompositionTrigger composition_trigger = CompositionTrigger::kNewLandmarks;
+  int composition_new_landmarks = 4;  ///< compose when MORE than this many are new (paper: 4)
+  ImuNoiseParams imu_noise;
+  double gravity_mps2 = 9.81;         ///< local gravity magnitude [m/s^2]
+  UpdateParams update;                ///< pixel noise [px] and chi^2 gate probability
+  LandmarkInitMethod landmark_init = LandmarkInitMethod::kFixedDepth;
+  double landmark_depth_m = 8.0;        ///< fixed depth of new landmarks [m]
+  double landmark_depth_sigma_m = 4.0;  ///< std-dev along the ray [m]
+  int max_landmarks = 300;              ///< map size bound
+  double landmark_timeout_s = 2.0;      ///< drop landmarks not observed for this long [s]; <0: never
+  double max_imu_gap_s = 0.1;           ///< IMU intervals longer than this are reported [s]
+  int imu_buffer_max = 4000;            ///< bound on buffered IMU samples
+  InitialUncertainty initial;
+
+  /// Empty if every value is possible, otherwise one line per problem.
+  std::string validate() const;
+};
+
+}  // namespace vi_ekf_slam

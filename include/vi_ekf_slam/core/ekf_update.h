@@ -1,0 +1,30 @@
+// EKF measurement update on the stacked observations of one image (paper Sec. III-G), with
+// per-landmark chi-square gating and a Joseph-stable covariance update.
+#pragma once
+
+#include <cstdint>
+#include <vector>
+
+#include "vi_ekf_slam/core/measurement_model.h"
+#include "vi_ekf_slam/core/types.h"
+
+namespace vi_ekf_slam {
+
+struct UpdateParams {
+  double pixel_noise_px = 1.0;     ///< std-dev of a feature position [px]
+  double gate_probability = 0.95;  ///< chi^2 gate on each landmark's 2-dof innovation (0..1)
+};
+
+struct UpdateResult {
+  int accepted = 0;
+  std::vector<std::int64_t> rejected_ids;  ///< failed the chi^2 gate
+  std::vector<std::int64_t> invalid_ids;   ///< unknown id, behind the camera, or non-finite
+  double nis_sum = 0.0;                    ///< sum of accepted normalized innovations squared
+};
+
+/// Updates state and covariance with observations of landmarks that are in the map.
+UpdateResult ekfUpdate(FilterState& state, const std::vector<FeatureObservation>& observations,
+                       const CameraModel& camera, const CameraExtrinsics& T_b_c,
+                       const UpdateParams& params);
+
+}  // namespace vi_ekf_slam

@@ -1,0 +1,105 @@
+// The EKF-SLAM state: nominal motion state s', the landmark map m (paper eq. 1-3) and the
+// error-state covariance P. Landmarks are expressed in the strapdown frame {s} (== {n} in the
+// world-centric filter), so the measurement model (eq. 29) is the same for every mechanization.
+#pragma once
+
+#include <Eigen/Core>
+#include <cstdint>
+#include <optional>
+#include <unordered_map>
+#include <vector>
+
+#include "vi_ekf_slam/core/so3.h"
+#include "vi_ekf_slam/core/state_layout.h"
+
+namespace vi_ekf_slam {
+
+/// Fixed-capacity matrix for the motion block (15x15 or 21x21) without heap allocation.
+using MotionMatrix = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::ColMajor,
+                                   idx::kMaxMotionDim, idx::kMaxMotionDim>;
+
+/// Nominal motion state. In the world-centric filter {s} == {n}, p_n_s == 0 and q_n_s == I.
+struct MotionState {
+  Vec3 p_s_b = Vec3::Zero();  ///< position of the body in {s} [m]
+  Vec3 v_s_b = Vec3::Zero();  ///< velocity of the body in {s} [m/s]
+  Vec3 b_a = Vec3::Zero();    ///< accelerometer bias [m/s^2]
+  Quat q_s_b = Quat::Identity();
+  Vec3 b_g = Vec3::Zero();    ///< gyroscope bias [rad/s]
+  Vec3 p_n_s = Vec3::Zero();  ///< position of {s} in {n} [m]
+  Quat q_n_s = Quat::Identity();
+};
+
+class FilterState {
+ public:
+  explicit FilterState(Mechanization mechanization = Mechanization::kWorldCentric);
+
+  Mechanization mechanization() const { return mechanization_; }
+  /// Changes the mechanization tag only between layouts of equal size (the two sensor-centric
+  /// variants); a change of layout goes through switchMechanization().
+  void setMechanizationTag(Mechanization m);
+
+  int motionDim() const { return vi_ekf_slam::motionDim(mechanization_); }
+  int numLandmarks() const { return static_cast<int>(landmark_ids_.size()); }
+  int dim() const { return motionDim() + idx::kLandmarkDim * numLandmarks(); }
+  /// Row/column of landmark i (by position in the map) in the error state.
+  int landmarkIndex(int i) const { return motionDim() + idx::kLandmarkDim * i; }
+
+  double timestamp = 0.0;  ///< time of the state [s]
+  MotionState x;
+
+  // --- map ---------------------------------------------------------------------------------
+  const std::vector<std::int64_t>& landmarkIds() const { return landmark_ids_; }
+  const Vec3& landmark(int i) const { return landmarks_[static_cast<size_t>(i)]; }
+  Vec3& landmark(int i) { return landmarks_[static_cast<size_t>(i)]; }
+  const std::vector<Vec3>& landmarks() const { return landmarks_; }
+  std::optional<int> findLandmark(std::int64_t id) const;
+
+  /// Appends a landmark at p_s_l with its 3x3 covariance and its cross-covariance to the
+  /// existing state (3 x dim(), in the current ordering).
+  void appendLandmark(std::int64_t id, const Vec3& p_s_l, const Eigen::Matrix3d& P_ll,
+                      const Eigen::MatrixXd& P_l_state);
+  /// Deletes landmarks (by map position) with their rows and columns of P.
+  void removeLandmarks(std::vector<int> indices);
+
+  // --- covariance --------------------------------------------------------------------------
+  /// Full covariance (applies any pending cross-covariance propagation first).
+  const Eigen::MatrixXd& covariance() const;
+  Eigen::MatrixXd& mutableCovariance();
+  /// Motion block P_s's' (always current, never waits for a flush).
+  MotionMatrix motionCovariance() const { return P_.topLeftCorner(motionDim(), motionDim()); }
+  /// Replaces the covariance (and, if the layout changes, the mechanization and the map).
+  void setCovariance(Eigen::MatrixXd P);
+
+  /// One propagation step (paper eq. 18-19): P_s's' <- Phi P_s's' Phi^T + Qd and
+  /// P_s'm <- Phi P_s'm. With lazy cross-covariance (default) the products Phi are accumulated
+  /// and applied to P_s'm once, when the full covariance is next read, so an IMU sample costs
+  /// the same whatever the map size.
+  void propagateCovariance(const MotionMatrix& Phi, const MotionMatrix& Qd);
+  void setLazyCrossCovariance(bool lazy);
+  bool hasPendingCrossPropagation() const { return has_pending_phi_; }
+
+  // --- error state -------------------------------------------------------------------------
+  /// Injects an error-state correction: additive for vectors, Exp(psi) * q for rotations.
+  void boxplus(const Eigen::VectorXd& dx);
+  /// Error state e such that other.boxplus(e) == *this (same layout and landmark ids).
+  Eigen::VectorXd boxminus(const FilterState& other) const;
+
+  /// Replaces nominal state, map and covariance at once (used by the frame changes).
+  void reset(Mechanization m, const MotionState& x, std::vector<std::int64_t> ids,
+             std::vector<Vec3> landmarks, Eigen::MatrixXd P);
+
+ private:
+  void flush() const;
+  void rebuildIndex();
+
+  Mechanization mechanization_;
+  std::vector<std::int64_t> landmark_ids_;
+  std::vector<Vec3> landmarks_;
+  std::unordered_map<std::int64_t, int> index_of_id_;
+  mutable Eigen::MatrixXd P_;
+  mutable MotionMatrix pending_phi_;
+  mutable bool has_pending_phi_ = false;
+  bool lazy_cross_ = true;
+};
+
+}  // namespace vi_ekf_slam

@@ -1,0 +1,46 @@
+// Changes of the reference frame of the whole state: the composition step (paper eq. 31-33),
+// the switch between world-centric and sensor-centric mechanizations, and the navigation-frame
+// view of a sensor-centric state. All three are maps whose Jacobian J has the structure
+//
+//          [ J_motion      0    ]      motion rows: a small dense block (15 or 21 square/rect.)
+//     J =  [ A_1        R_l     ]      landmark i:  one rotation R_l shared by all landmarks,
+//          [ A_2             R_l]      plus A_i acting on one position and one rotation block
+//
+// so P' = J P J^T is computed in O(n^2) with block operations, never as a dense n^3 product.
+#pragma once
+
+#include <vector>
+
+#include "vi_ekf_slam/core/filter_state.h"
+
+namespace vi_ekf_slam {
+
+struct FrameChangeJacobian {
+  Eigen::MatrixXd J_motion;  ///< motion_out x motion_in
+  Mat3 R_l;                  ///< d(landmark_out)/d(landmark_in), same for every landmark
+  int pos_col = 0;           ///< motion column block that A_pos acts on
+  Mat3 A_pos;                ///< d(landmark_out)/d(motion[pos_col..+3])
+  int rot_col = 0;           ///< motion column block that A_rot[i] acts on
+  std::vector<Mat3> A_rot;   ///< d(landmark_out_i)/d(motion[rot_col..+3])
+};
+
+/// Computes J P J^T for a structured J (see above).
+Eigen::MatrixXd applyFrameChange(const Eigen::MatrixXd& P, const FrameChangeJacobian& J);
+/// Dense J (for tests and small problems only).
+Eigen::MatrixXd denseJacobian(const FrameChangeJacobian& J, int num_landmarks);
+
+/// The composition step (eq. 31-33): the strapdown frame is reset to the current body frame.
+/// Only for sensor-centric states. Biases are untouched; p_n_s, q_n_s are composed (eq. 32).
+FrameChangeJacobian compositionJacobian(const FilterState& state);
+void compose(FilterState& state);
+
+/// Converts the state between world-centric and sensor-centric layouts, keeping the map and
+/// every navigation-frame quantity with its covariance. World -> sensor puts {s} at the current
+/// body frame (like a composition). Between the two sensor-centric variants only the tag changes.
+FrameChangeJacobian worldToSensorJacobian(const FilterState& state);
+FrameChangeJacobian sensorToWorldJacobian(const FilterState& state);
+/// Motion rows of sensorToWorldJacobian() (15 x 21), which need no landmark.
+Eigen::MatrixXd sensorToWorldMotionJacobian(const MotionState& x);
+void switchMechanization(FilterState& state, Mechanization target);
+
+}  // namespace vi_ekf_slam

@@ -1,0 +1,40 @@
+// Landmark initialization as in the paper (Sec. IV-A): a new landmark is put at a fixed depth
+// along the ray of its first observation, with a large variance along the ray and the pixel
+// noise across it, and with its full cross-covariance to the state through the initialization
+// Jacobians (first-order propagation of pose, pixel and depth uncertainty).
+#pragma once
+
+#include "vi_ekf_slam/core/measurement_model.h"
+#include "vi_ekf_slam/core/types.h"
+
+namespace vi_ekf_slam {
+
+struct FixedDepthParams {
+  double depth_m = 8.0;        ///< depth (camera z) of a new landmark [m]
+  double depth_sigma_m = 4.0;  ///< std-dev of that depth [m]
+  double pixel_noise_px = 1.0; ///< std-dev of the observed pixel [px]
+};
+
+/// Landmark position and its Jacobians w.r.t. body position/orientation error, pixel, depth.
+struct InitializedLandmark {
+  Vec3 p_s_l;
+  Mat3 G_p;
+  Mat3 G_psi;
+  Eigen::Matrix<double, 3, 2> G_uv;
+  Vec3 G_depth;
+};
+
+/// Back-projects pixel uv to depth `depth` (camera z) in the strapdown frame.
+bool backProject(const MotionState& x, const Eigen::Vector2d& uv, double depth,
+                 const CameraModel& camera, const CameraExtrinsics& T_b_c, InitializedLandmark* out);
+
+/// Adds the landmark with its covariance and cross-covariance to the state.
+void appendInitializedLandmark(FilterState& state, std::int64_t id, const InitializedLandmark& l,
+                               double pixel_var, double depth_var);
+
+/// Paper's rule: fixed depth along the ray. False if the pixel cannot be undistorted.
+bool initializeLandmarkFixedDepth(FilterState& state, const FeatureObservation& obs,
+                                  const CameraModel& camera, const CameraExtrinsics& T_b_c,
+                                  const FixedDepthParams& params);
+
+}  // namespace vi_ekf_slam

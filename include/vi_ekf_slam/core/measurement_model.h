@@ -1,0 +1,34 @@
+// Landmark observation model (paper eq. 29-30): z = pi(C_s^c (Y - p_s_c)) + v, with the
+// camera-IMU extrinsic R_b_c, p_b_c. The same model serves every mechanization because
+// landmarks live in the strapdown frame {s}.
+#pragma once
+
+#include <Eigen/Core>
+
+#include "vi_ekf_slam/core/camera_model.h"
+#include "vi_ekf_slam/core/filter_state.h"
+
+namespace vi_ekf_slam {
+
+/// Pose of the camera {c} in the body/IMU frame {b}.
+struct CameraExtrinsics {
+  Mat3 R_b_c = Mat3::Identity();
+  Vec3 p_b_c = Vec3::Zero();  ///< [m]
+};
+
+/// Jacobians of one predicted observation (2 rows): J_pi * [J_p, J_psi, J_Y] of eq. (30).
+struct ObservationJacobians {
+  Eigen::Matrix<double, 2, 3> H_p;    ///< w.r.t. position error of {b} in {s}
+  Eigen::Matrix<double, 2, 3> H_psi;  ///< w.r.t. orientation error psi_s_b
+  Eigen::Matrix<double, 2, 3> H_l;    ///< w.r.t. landmark position error
+};
+
+/// Landmark p_s_l in the camera frame.
+Vec3 landmarkInCamera(const MotionState& x, const Vec3& p_s_l, const CameraExtrinsics& T_b_c);
+
+/// Predicts the pixel of landmark p_s_l; false if it is behind the camera.
+bool predictObservation(const MotionState& x, const Vec3& p_s_l, const CameraModel& camera,
+                        const CameraExtrinsics& T_b_c, Eigen::Vector2d* uv,
+                        ObservationJacobians* J = nullptr);
+
+}  // namespace vi_ekf_slam

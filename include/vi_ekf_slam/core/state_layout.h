@@ -1,0 +1,43 @@
+// Error-state layout (paper eq. 10 and the sensor-centric extension of eq. 20). Index constants
+// are used everywhere instead of magic numbers.
+#pragma once
+
+#include <optional>
+#include <string>
+
+namespace vi_ekf_slam {
+
+/// How the strapdown equations are formulated (paper Sec. III-E/F/H).
+enum class Mechanization {
+  kWorldCentric,              ///< strapdown frame {s} == navigation frame {n}
+  kSensorCentric,             ///< {s} = body frame at start; p_n_s, q_n_s estimated
+  kSensorCentricComposition,  ///< as above, {s} reset to the body frame by the composition step
+};
+
+/// Does this mechanization carry p_n_s, q_n_s in the state?
+inline bool isSensorCentric(Mechanization m) { return m != Mechanization::kWorldCentric; }
+
+std::string toString(Mechanization m);
+std::optional<Mechanization> mechanizationFromString(const std::string& s);
+
+namespace idx {
+// Error-state block offsets. In the world-centric filter {s} == {n}.
+constexpr int kP = 0;       ///< position of {b} in {s}
+constexpr int kV = 3;       ///< velocity of {b} in {s}
+constexpr int kBa = 6;      ///< accelerometer bias
+constexpr int kPsi = 9;     ///< orientation error psi_s_b (global, in {s})
+constexpr int kBg = 12;     ///< gyroscope bias
+constexpr int kPns = 15;    ///< position of {s} in {n} (sensor-centric only)
+constexpr int kPsiNs = 18;  ///< orientation error psi_n_s (sensor-centric only)
+constexpr int kWorldCentricDim = 15;
+constexpr int kSensorCentricDim = 21;
+constexpr int kMaxMotionDim = 21;
+constexpr int kLandmarkDim = 3;
+}  // namespace idx
+
+/// Error-state dimension of the motion part s' for a mechanization.
+inline int motionDim(Mechanization m) {
+  return isSensorCentric(m) ? idx::kSensorCentricDim : idx::kWorldCentricDim;
+}
+
+}  // namespace vi_ekf_slam

@@ -1,0 +1,45 @@
+// Initialization from a short static interval: roll and pitch from the mean specific force
+// (gravity alignment), yaw set to zero (unobservable), gyro bias from the mean angular rate.
+#pragma once
+
+#include <deque>
+#include <optional>
+
+#include "vi_ekf_slam/core/so3.h"
+#include "vi_ekf_slam/core/types.h"
+
+namespace vi_ekf_slam {
+
+struct StaticInitParams {
+  double window_s = 1.0;             ///< length of the static window [s]
+  double max_accel_std_mps2 = 0.15;  ///< max std-dev of |am| inside the window [m/s^2]
+  double max_gyro_std_radps = 0.02;  ///< max std-dev of each gyro axis inside the window [rad/s]
+  double gravity_mps2 = 9.81;        ///< local gravity [m/s^2]
+  double max_gravity_error_mps2 = 0.5;  ///< | |mean am| - g | must stay below this [m/s^2]
+};
+
+struct StaticInitResult {
+  double timestamp = 0.0;  ///< end of the static window [s]
+  Quat q_n_b = Quat::Identity();
+  Vec3 b_g = Vec3::Zero();
+  double accel_std_mps2 = 0.0;
+  double gyro_std_radps = 0.0;
+};
+
+/// Attitude with the given body-frame "down" direction mapped to {n}'s z axis and zero yaw.
+Quat gravityAlignedAttitude(const Vec3& mean_specific_force_b);
+
+class StaticInitializer {
+ public:
+  explicit StaticInitializer(const StaticInitParams& params = StaticInitParams());
+  /// Adds a sample (non-finite or out-of-order samples are ignored); returns the result as soon
+  /// as the last window_s of samples were static.
+  std::optional<StaticInitResult> addImu(const ImuData& imu);
+  void reset() { window_.clear(); }
+
+ private:
+  StaticInitParams params_;
+  std::deque<ImuData> window_;
+};
+
+}  // namespace vi_ekf_slam

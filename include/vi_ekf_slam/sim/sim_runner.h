@@ -1,0 +1,55 @@
+// Drives an EkfSlam over a simulated scenario: synthesizes the IMU stream and the camera frames
+// from one trajectory and world, feeds them in time order, and records the estimate and the
+// truth at every camera time.
+#pragma once
+
+#include <functional>
+#include <memory>
+#include <random>
+#include <vector>
+
+#include "vi_ekf_slam/core/ekf_slam.h"
+#include "vi_ekf_slam/sim/camera_simulator.h"
+#include "vi_ekf_slam/sim/imu_simulator.h"
+#include "vi_ekf_slam/sim/landmark_world.h"
+#include "vi_ekf_slam/sim/trajectory.h"
+
+namespace vi_ekf_slam::sim {
+
+struct Scenario {
+  std::shared_ptr<const Trajectory> trajectory;
+  LandmarkWorld world;
+  CameraModel camera;
+  CameraExtrinsics T_b_c;
+  ImuSimParams imu;
+  CameraSimParams cam;
+};
+
+/// One camera time of a run.
+struct FrameRecord {
+  double t = 0.0;
+  TrajectorySample truth;
+  Vec3 true_accel_bias = Vec3::Zero();
+  Vec3 true_gyro_bias = Vec3::Zero();
+  NavState estimate;
+  FrameResult result;
+  int landmarks_in_state = 0;
+};
+
+struct SimRun {
+  std::vector<FrameRecord> frames;
+  std::vector<NavLandmark> final_landmarks;
+};
+
+/// Called after each processed frame, with the filter (for extra per-frame metrics).
+using FrameCallback = std::function<void(EkfSlam&, FrameRecord&)>;
+
+/// Runs the filter from `initial` (usually the truth plus an error drawn by the caller).
+/// The random generator drives sensor noise.
+SimRun runSimulation(const Scenario& scenario, const EkfSlamConfig& config, const NavState& initial,
+                     std::mt19937_64& rng, const FrameCallback& callback = nullptr);
+
+/// The true navigation state at time t (zero biases) for initialization.
+NavState trueNavState(const Trajectory& trajectory, double t);
+
+}  // namespace vi_ekf_slam::sim

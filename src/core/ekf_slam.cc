@@ -1,0 +1,217 @@
+#include "vi_ekf_slam/core/ekf_slam.h"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <stdexcept>
+
+#include "vi_ekf_slam/core/frame_change.h"
+#include "vi_ekf_slam/core/imu_propagation.h"
+#include "vi_ekf_slam/core/landmark_initialization.h"
+
+namespace vi_ekf_slam {
+
+EkfSlam::EkfSlam(const EkfSlamConfig& config, const CameraModel& camera, const CameraExtrinsics& T_b_c)
+    : config_(config), camera_(camera), T_b_c_(T_b_c), state_(config.mechanization) {
+  const std::string err = config_.validate();
+  if (!err.empty()) throw std::invalid_argument("EkfSlamConfig:\n" + err);
+  if (!camera_.intrinsics().validate().empty() || camera_.width() <= 0) {
+    throw std::invalid_argument("EkfSlam: invalid camera: " + camera_.intrinsics().validate());
+  }
+  const Mat3 RtR = T_b_c_.R_b_c.transpose() * T_b_c_.R_b_c;
+  if (!T_b_c_.R_b_c.allFinite() || !T_b_c_.p_b_c.allFinite() ||
+      (RtR - Mat3::Identity()).norm() > 1e-6 || T_b_c_.R_b_c.determinant() < 0.0) {
+    throw std::invalid_argument("EkfSlam: camera-IMU rotation R_b_c is not a rotation");
+  }
+  g_n_ = gravityInNav(config_.gravity_mps2);
+}
+
+void EkfSlam::reset() {
+  state_ = FilterState(config_.mechanization);
+  initialized_ = false;
+  imu_.clear();
+  last_seen_.clear();
+  compositions_ = 0;
+  imu_gaps_ = 0;
+}
+
+void EkfSlam::initialize(const NavState& init) {
+  using namespace idx;
+  const InitialUncertainty& u = config_.initial;
+  // Start world-centric: the initial pose uncertainty is the registration error in {n}.
+  FilterState s(Mechanization::kWorldCentric);
+  s.timestamp = init.timestamp;
+  s.x.p_s_b = init.p_n_b;
+  s.x.v_s_b = init.v_n_b;
+  s.x.q_s_b = init.q_n_b.normalized();
+  s.x.b_a = init.b_a;
+  s.x.b_g = init.b_g;
+  Eigen::MatrixXd P = Eigen::MatrixXd::Zero(kWorldCentricDim, kWorldCentricDim);
+  P.block<3, 3>(kP, kP).diagonal().setConstant(u.position_m * u.position_m);
+  P.block<3, 3>(kV, kV).diagonal().setConstant(u.velocity_mps * u.velocity_mps);
+  P.block<3, 3>(kBa, kBa).diagonal().setConstant(u.accel_bias_mps2 * u.accel_bias_mps2);
+  P.block<3, 3>(kPsi, kPsi).diagonal() << u.roll_pitch_rad * u.roll_pitch_rad,
+      u.roll_pitch_rad * u.roll_pitch_rad, u.yaw_rad * u.yaw_rad;
+  P.block<3, 3>(kBg, kBg).diagonal().setConstant(u.gyro_bias_radps * u.gyro_bias_radps);
+  s.setCovariance(P);
+  // Sensor-centric: {s} := initial body frame; the pose in {s} is exact and the registration
+  // uncertainty moves to p_n_s, q_n_s (the same frame change as a mechanization switch).
+  if (isSensorCentric(config_.mechanization)) switchMechanization(s, config_.mechanization);
+  state_ = std::move(s);
+  last_seen_.clear();
+  compositions_ = 0;
+  initialized_ = true;
+  // Samples older than the start are of no use any more, except the one just before it.
+  while (imu_.size() > 1 && imu_[1].timestamp <= init.timestamp) imu_.pop_front();
+}
+
+bool EkfSlam::addImu(const ImuData& imu) {
+  if (!std::isfinite(imu.timestamp) || !imu.wm.allFinite() || !imu.am.allFinite()) return false;
+  if (!imu_.empty() && imu.timestamp <= imu_.back().timestamp) return false;
+  if (!imu_.empty() && imu.timestamp - imu_.back().timestamp > config_.max_imu_gap_s) ++imu_gaps_;
+  imu_.push_back(imu);
+  if (static_cast<int>(imu_.size()) > config_.imu_buffer_max) {
+    // No image for a long time: integrate the oldest samples so the buffer stays bounded.
+    if (initialized_) propagateTo(imu_[imu_.size() / 2].timestamp);
+    while (static_cast<int>(imu_.size()) > config_.imu_buffer_max) imu_.pop_front();
+  }
+  return true;
+}
+
+double EkfSlam::latestImuTime() const {
+  return imu_.empty() ? -std::numeric_limits<double>::infinity() : imu_.back().timestamp;
+}
+
+bool EkfSlam::propagateTo(double t) {
+  if (!initialized_ || !std::isfinite(t) || t < state_.timestamp) return false;
+  if (imu_.empty() || imu_.back().timestamp < t) return false;
+  auto integrate = [&](double t0, double t1, const Vec3& wm, const Vec3& am) {
+    if (t1 > t0) propagateState(state_, wm, am, t1 - t0, config_.imu_noise, g_n_);
+  };
+  // Before the first buffered sample: hold it.
+  if (state_.timestamp < imu_.front().timestamp) {
+    integrate(state_.timestamp, std::min(t, imu_.front().timestamp), imu_.front().wm, imu_.front().am);
+  }
+  for (size_t k = 0; k + 1 < imu_.size(); ++k) {
+    const ImuData& a = imu_[k];
+    const ImuData& b = imu_[k + 1];
+    const double t0 = std::max(a.timestamp, state_.timestamp);
+    const double t1 = std::min(b.timestamp, t);
+    if (t1 > t0) {
+      // Mean of the linearly interpolated measurements over [t0, t1] = value at its middle.
+      const double alpha = (0.5 * (t0 + t1) - a.timestamp) / (b.timestamp - a.timestamp);
+      integrate(t0, t1, (1.0 - alpha) * a.wm + alpha * b.wm, (1.0 - alpha) * a.am + alpha * b.am);
+    }
+    if (b.timestamp >= t) break;
+  }
+  state_.timestamp = t;
+  while (imu_.size() > 1 && imu_[1].timestamp <= t) imu_.pop_front();
+  return true;
+}
+
+bool EkfSlam::initializeLandmark(const FeatureObservation& obs) {
+  switch (config_.landmark_init) {
+    case LandmarkInitMethod::kFixedDepth: {
+      FixedDepthParams p;
+      p.depth_m = config_.landmark_depth_m;
+      p.depth_sigma_m = config_.landmark_depth_sigma_m;
+      p.pixel_noise_px = config_.update.pixel_noise_px;
+      return initializeLandmarkFixedDepth(state_, obs, camera_, T_b_c_, p);
+    }
+  }
+  return false;
+}
+
+void EkfSlam::removeLandmarksById(const std::vector<std::int64_t>& ids) {
+  std::vector<int> indices;
+  for (auto id : ids) {
+    if (auto i = state_.findLandmark(id)) indices.push_back(*i);
+    last_seen_.erase(id);
+  }
+  state_.removeLandmarks(indices);
+}
+
+bool EkfSlam::shouldCompose(int new_landmarks) const {
+  if (state_.mechanization() != Mechanization::kSensorCentricComposition) return false;
+  switch (config_.composition_trigger) {
+    case CompositionTrigger::kNewLandmarks:
+      return new_landmarks > config_.composition_new_landmarks;
+    case CompositionTrigger::kEveryUpdate:
+      return true;
+    case CompositionTrigger::kNever:
+      return false;
+  }
+  return false;
+}
+
+FrameResult EkfSlam::processFrame(const CameraFrame& frame) {
+  FrameResult r;
+  if (!initialized_) {
+    r.error = "filter not initialized";
+    return r;
+  }
+  if (!std::isfinite(frame.timestamp) || frame.timestamp < state_.timestamp) {
+    r.error = "frame older than the filter state";
+    return r;
+  }
+  if (!propagateTo(frame.timestamp)) {
+    r.error = "IMU does not reach the frame time yet";
+    return r;
+  }
+  std::vector<FeatureObservation> known, fresh;
+  for (const auto& f : frame.features) {
+    if (!f.uv.allFinite()) continue;
+    (state_.findLandmark(f.id) ? known : fresh).push_back(f);
+  }
+  r.update = ekfUpdate(state_, known, camera_, T_b_c_, config_.update);
+  for (const auto& f : known) last_seen_[f.id] = frame.timestamp;
+
+  // Map management: drop landmarks not seen for landmark_timeout_s, then make room for the new
+  // ones by dropping those seen longest ago (never one observed in this frame).
+  std::vector<std::pair<double, std::int64_t>> by_age;
+  for (const auto& [id, t] : last_seen_) by_age.emplace_back(t, id);
+  std::sort(by_age.begin(), by_age.end());
+  std::vector<std::int64_t> drop;
+  size_t k = 0;
+  if (config_.landmark_timeout_s >= 0.0) {
+    for (; k < by_age.size() && by_age[k].first < frame.timestamp - config_.landmark_timeout_s; ++k) {
+      drop.push_back(by_age[k].second);
+    }
+  }
+  const int wanted = static_cast<int>(fresh.size());
+  while (state_.numLandmarks() - static_cast<int>(drop.size()) + wanted > config_.max_landmarks &&
+         k < by_age.size() && by_age[k].first < frame.timestamp) {
+    drop.push_back(by_age[k++].second);
+  }
+  removeLandmarksById(drop);
+  r.removed_ids = drop;
+
+  for (const auto& f : fresh) {
+    if (state_.numLandmarks() >= config_.max_landmarks) break;
+    if (initializeLandmark(f)) {
+      r.new_ids.push_back(f.id);
+      last_seen_[f.id] = frame.timestamp;
+    }
+  }
+  if (shouldCompose(static_cast<int>(r.new_ids.size()))) {
+    compose(state_);
+    ++compositions_;
+    r.composed = true;
+  }
+  r.processed = true;
+  return r;
+}
+
+void EkfSlam::setMechanization(Mechanization m) {
+  config_.mechanization = m;
+  if (initialized_) switchMechanization(state_, m);
+  else state_ = FilterState(m);
+}
+
+void EkfSlam::composeNow() {
+  if (!initialized_ || !isSensorCentric(state_.mechanization())) return;
+  compose(state_);
+  ++compositions_;
+}
+
+}  // namespace vi_ekf_slam

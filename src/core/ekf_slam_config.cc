@@ -1,0 +1,66 @@
+#include "vi_ekf_slam/core/ekf_slam_config.h"
+
+#include <cmath>
+#include <sstream>
+
+namespace vi_ekf_slam {
+
+std::string toString(CompositionTrigger t) {
+  switch (t) {
+    case CompositionTrigger::kNewLandmarks:
+      return "new_landmarks";
+    case CompositionTrigger::kEveryUpdate:
+      return "every_update";
+    case CompositionTrigger::kNever:
+      return "never";
+  }
+  return "unknown";
+}
+
+std::string toString(LandmarkInitMethod m) {
+  switch (m) {
+    case LandmarkInitMethod::kFixedDepth:
+      return "fixed_depth";
+  }
+  return "unknown";
+}
+
+namespace {
+void requirePositive(std::ostringstream& err, const char* name, double v) {
+  if (!std::isfinite(v) || v <= 0.0) err << name << " must be > 0 (got " << v << ")\n";
+}
+void requireNonNegative(std::ostringstream& err, const char* name, double v) {
+  if (!std::isfinite(v) || v < 0.0) err << name << " must be >= 0 (got " << v << ")\n";
+}
+}  // namespace
+
+std::string EkfSlamConfig::validate() const {
+  std::ostringstream err;
+  requirePositive(err, "imu_noise.accel_noise_density [m/s^2/sqrt(Hz)]", imu_noise.accel_noise_density);
+  requirePositive(err, "imu_noise.gyro_noise_density [rad/s/sqrt(Hz)]", imu_noise.gyro_noise_density);
+  requireNonNegative(err, "imu_noise.accel_random_walk [m/s^3/sqrt(Hz)]", imu_noise.accel_random_walk);
+  requireNonNegative(err, "imu_noise.gyro_random_walk [rad/s^2/sqrt(Hz)]", imu_noise.gyro_random_walk);
+  if (!std::isfinite(gravity_mps2) || gravity_mps2 < 9.7 || gravity_mps2 > 9.9) {
+    err << "gravity_mps2 must be in [9.7, 9.9] (got " << gravity_mps2 << ")\n";
+  }
+  requirePositive(err, "update.pixel_noise_px [px]", update.pixel_noise_px);
+  if (!(update.gate_probability > 0.0 && update.gate_probability < 1.0)) {
+    err << "update.gate_probability must be in (0, 1) (got " << update.gate_probability << ")\n";
+  }
+  requirePositive(err, "landmark_depth_m [m]", landmark_depth_m);
+  requirePositive(err, "landmark_depth_sigma_m [m]", landmark_depth_sigma_m);
+  if (max_landmarks < 1) err << "max_landmarks must be >= 1 (got " << max_landmarks << ")\n";
+  if (composition_new_landmarks < 0) err << "composition_new_landmarks must be >= 0\n";
+  if (!std::isfinite(landmark_timeout_s)) err << "landmark_timeout_s must be finite (use < 0 for never)\n";
+  requirePositive(err, "max_imu_gap_s [s]", max_imu_gap_s);
+  if (imu_buffer_max < 10) err << "imu_buffer_max must be >= 10\n";
+  requireNonNegative(err, "initial.position_m [m]", initial.position_m);
+  requirePositive(err, "initial.velocity_mps [m/s]", initial.velocity_mps);
+  requireNonNegative(err, "initial.roll_pitch_rad [rad]", initial.roll_pitch_rad);
+  requireNonNegative(err, "initial.yaw_rad [rad]", initial.yaw_rad);
+  requirePositive(err, "initial.accel_bias_mps2 [m/s^2]", initial.accel_bias_mps2);
+  requirePositive(err, "initial.gyro_bias_radps [rad/s]", initial.gyro_bias_radps);
+  return err.str();
+}
+
+}  // namespace vi_ekf_slam

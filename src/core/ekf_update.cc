@@ -1,0 +1,103 @@
+#include "vi_ekf_slam/core/ekf_update.h"
+
+#include <Eigen/Cholesky>
+#include <cmath>
+
+#include "vi_ekf_slam/core/chi_squared.h"
+#include "vi_ekf_slam/core/matrix_utils.h"
+
+namespace vi_ekf_slam {
+
+namespace {
+struct AcceptedObservation {
+  std::int64_t id;
+  int col;  ///< landmark column in the error state
+  ObservationJacobians J;
+  Eigen::Vector2d residual;
+};
+}  // namespace
+
+UpdateResult ekfUpdate(FilterState& state, const std::vector<FeatureObservation>& observations,
+                       const CameraModel& camera, const CameraExtrinsics& T_b_c,
+                       const UpdateParams& params) {
+  UpdateResult result;
+  const double r_var = params.pixel_noise_px * params.pixel_noise_px;
+  const double gate = chiSquaredQuantile(params.gate_probability, 2.0);
+  const Eigen::MatrixXd& P0 = state.covariance();
+
+  // 1) Predict, linearize and gate every observation on its own 2-dof innovation.
+  std::vector<AcceptedObservation> acc;
+  acc.reserve(observations.size());
+  for (const auto& obs : observations) {
+    const auto li = state.findLandmark(obs.id);
+    Eigen::Vector2d uv;
+    AcceptedObservation a;
+    if (!li || !obs.uv.allFinite() ||
+        !predictObservation(state.x, state.landmark(*li), camera, T_b_c, &uv, &a.J)) {
+      result.invalid_ids.push_back(obs.id);
+      continue;
+    }
+    a.id = obs.id;
+    a.col = state.landmarkIndex(*li);
+    a.residual = obs.uv - uv;
+    const int blocks[3] = {idx::kP, idx::kPsi, a.col};
+    const Eigen::Matrix<double, 9, 9> Psub = gatherBlocks<3>(P0, blocks);
+    Eigen::Matrix<double, 2, 9> Hsub;
+    Hsub << a.J.H_p, a.J.H_psi, a.J.H_l;
+    const Eigen::Matrix2d S = Hsub * Psub * Hsub.transpose() + r_var * Eigen::Matrix2d::Identity();
+    const double d2 = a.residual.dot(S.ldlt().solve(a.residual));
+    if (!std::isfinite(d2) || d2 > gate) {
+      result.rejected_ids.push_back(obs.id);
+      continue;
+    }
+    acc.push_back(a);
+  }
+  result.accepted = static_cast<int>(acc.size());
+  if (acc.empty()) return result;
+
+  // 2) Stacked update. H has 9 non-zero columns per observation, so P H^T and H P H^T are
+  //    assembled block-wise in O(n m) instead of forming H.
+  Eigen::MatrixXd& P = state.mutableCovariance();
+  const int n = state.dim();
+  const int m = 2 * result.accepted;
+  Eigen::MatrixXd PHt(n, m);
+  Eigen::VectorXd r(m);
+  for (int j = 0; j < result.accepted; ++j) {
+    const auto& a = acc[static_cast<size_t>(j)];
+    PHt.middleCols<2>(2 * j).noalias() = P.middleCols<3>(idx::kP) * a.J.H_p.transpose();
+    PHt.middleCols<2>(2 * j).noalias() += P.middleCols<3>(idx::kPsi) * a.J.H_psi.transpose();
+    PHt.middleCols<2>(2 * j).noalias() += P.middleCols<3>(a.col) * a.J.H_l.transpose();
+    r.segment<2>(2 * j) = a.residual;
+  }
+  Eigen::MatrixXd S(m, m);
+  for (int i = 0; i < result.accepted; ++i) {
+    const auto& a = acc[static_cast<size_t>(i)];
+    S.middleRows<2>(2 * i).noalias() = a.J.H_p * PHt.middleRows<3>(idx::kP);
+    S.middleRows<2>(2 * i).noalias() += a.J.H_psi * PHt.middleRows<3>(idx::kPsi);
+    S.middleRows<2>(2 * i).noalias() += a.J.H_l * PHt.middleRows<3>(a.col);
+  }
+  S.diagonal().array() += r_var;
+  symmetrize(S);
+  const Eigen::LLT<Eigen::MatrixXd> llt(S);
+  if (llt.info() != Eigen::Success) {  // numerically broken P: refuse rather than corrupt it
+    for (const auto& a : acc) result.invalid_ids.push_back(a.id);
+    result.accepted = 0;
+    return result;
+  }
+  const Eigen::MatrixXd K = llt.solve(PHt.transpose()).transpose();  // P H^T S^-1
+  const Eigen::VectorXd dx = K * r;
+  result.nis_sum = r.dot(llt.solve(r));
+
+  // 3) Joseph form (I-KH) P (I-KH)^T + K R K^T, expanded without forming I-KH:
+  //    P - K B^T - B K^T + K S K^T with B = P H^T. It holds for any gain K, so errors in K
+  //    enter P only to second order, as with the textbook Joseph form, at O(n^2 m) cost.
+  //    Written as P + K W^T + W K^T with W = K S / 2 - B.
+  const Eigen::MatrixXd W = 0.5 * K * S - PHt;
+  P.noalias() += K * W.transpose();
+  P.noalias() += W * K.transpose();
+  symmetrize(P);
+  state.boxplus(dx);
+  return result;
+}
+
+}  // namespace vi_ekf_slam

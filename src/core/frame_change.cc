@@ -1,0 +1,197 @@
+#include "vi_ekf_slam/core/frame_change.h"
+
+#include <stdexcept>
+
+#include "vi_ekf_slam/core/matrix_utils.h"
+
+namespace vi_ekf_slam {
+
+namespace {
+
+/// M J^T for any M with as many columns as the input state (column blocks only, O(rows * n)).
+Eigen::MatrixXd multiplyByTransposeOnRight(const Eigen::MatrixXd& M, const FrameChangeJacobian& J) {
+  const int m_in = static_cast<int>(J.J_motion.cols());
+  const int m_out = static_cast<int>(J.J_motion.rows());
+  const int N = static_cast<int>(J.A_rot.size());
+  const Eigen::Index rows = M.rows();
+  Eigen::MatrixXd out(rows, m_out + 3 * N);
+  out.leftCols(m_out).noalias() = M.leftCols(m_in) * J.J_motion.transpose();
+  const auto M_pos = M.middleCols<3>(J.pos_col);
+  const auto M_rot = M.middleCols<3>(J.rot_col);
+  const Eigen::MatrixXd M_pos_A = M_pos * J.A_pos.transpose();
+  for (int i = 0; i < N; ++i) {
+    auto o = out.middleCols<3>(m_out + 3 * i);
+    o.noalias() = M.middleCols<3>(m_in + 3 * i) * J.R_l.transpose();
+    o += M_pos_A;
+    o.noalias() += M_rot * J.A_rot[static_cast<size_t>(i)].transpose();
+  }
+  return out;
+}
+
+/// Error-state Jacobian blocks shared by world->sensor and the composition: a new strapdown
+/// frame is placed at the current body pose (p, R) of the reference frame.
+///   v'  = R^T v          -> dv'  = R^T dv + R^T [v]x dpsi
+///   Y'  = R^T (Y - p)    -> dY'  = R^T dY - R^T dp + R^T [Y - p]x dpsi
+void resetToBodyLandmarks(const FilterState& s, const Mat3& R, FrameChangeJacobian* J) {
+  J->R_l = R.transpose();
+  J->pos_col = idx::kP;
+  J->A_pos = -R.transpose();
+  J->rot_col = idx::kPsi;
+  J->A_rot.resize(static_cast<size_t>(s.numLandmarks()));
+  for (int i = 0; i < s.numLandmarks(); ++i) {
+    J->A_rot[static_cast<size_t>(i)] = R.transpose() * skew(s.landmark(i) - s.x.p_s_b);
+  }
+}
+
+void checkFinite(const Eigen::MatrixXd& P) {
+  if (!P.allFinite()) throw std::runtime_error("frame change produced a non-finite covariance");
+}
+
+}  // namespace
+
+Eigen::MatrixXd applyFrameChange(const Eigen::MatrixXd& P, const FrameChangeJacobian& J) {
+  // P' = J (P J^T) = (J (J P)^T) ... with P symmetric: T = P J^T, P' = (T^T) J^T.
+  const Eigen::MatrixXd T = multiplyByTransposeOnRight(P, J);
+  Eigen::MatrixXd Pn = multiplyByTransposeOnRight(T.transpose(), J);
+  symmetrize(Pn);
+  return Pn;
+}
+
+Eigen::MatrixXd denseJacobian(const FrameChangeJacobian& J, int N) {
+  const int m_in = static_cast<int>(J.J_motion.cols());
+  const int m_out = static_cast<int>(J.J_motion.rows());
+  Eigen::MatrixXd D = Eigen::MatrixXd::Zero(m_out + 3 * N, m_in + 3 * N);
+  D.topLeftCorner(m_out, m_in) = J.J_motion;
+  for (int i = 0; i < N; ++i) {
+    D.block<3, 3>(m_out + 3 * i, m_in + 3 * i) = J.R_l;
+    D.block<3, 3>(m_out + 3 * i, J.pos_col) += J.A_pos;
+    D.block<3, 3>(m_out + 3 * i, J.rot_col) += J.A_rot[static_cast<size_t>(i)];
+  }
+  return D;
+}
+
+FrameChangeJacobian compositionJacobian(const FilterState& s) {
+  using namespace idx;
+  if (!isSensorCentric(s.mechanization())) throw std::logic_error("composition needs a sensor-centric state");
+  const Mat3 R = s.x.q_s_b.toRotationMatrix();
+  const Mat3 R_n_s = s.x.q_n_s.toRotationMatrix();
+  FrameChangeJacobian J;
+  J.J_motion = Eigen::MatrixXd::Zero(kSensorCentricDim, kSensorCentricDim);
+  // p_s2_b = 0 and q_s2_b = I exactly: their rows stay zero (eq. 31 applied to {b} itself).
+  J.J_motion.block<3, 3>(kV, kV) = R.transpose();
+  J.J_motion.block<3, 3>(kV, kPsi) = R.transpose() * skew(s.x.v_s_b);
+  J.J_motion.block<3, 3>(kBa, kBa).setIdentity();
+  J.J_motion.block<3, 3>(kBg, kBg).setIdentity();
+  // eq. (32): T_n_s2 = T_n_s T_s_b.
+  J.J_motion.block<3, 3>(kPns, kPns).setIdentity();
+  J.J_motion.block<3, 3>(kPns, kP) = R_n_s;
+  J.J_motion.block<3, 3>(kPns, kPsiNs) = -skew(R_n_s * s.x.p_s_b);
+  J.J_motion.block<3, 3>(kPsiNs, kPsiNs).setIdentity();
+  J.J_motion.block<3, 3>(kPsiNs, kPsi) = R_n_s;
+  resetToBodyLandmarks(s, R, &J);
+  return J;
+}
+
+void compose(FilterState& s) {
+  const FrameChangeJacobian J = compositionJacobian(s);
+  Eigen::MatrixXd Pn = applyFrameChange(s.covariance(), J);
+  checkFinite(Pn);
+  const Mat3 Rt = s.x.q_s_b.conjugate().toRotationMatrix();
+  MotionState x = s.x;
+  x.p_n_s = s.x.p_n_s + s.x.q_n_s * s.x.p_s_b;
+  x.q_n_s = (s.x.q_n_s * s.x.q_s_b).normalized();
+  x.v_s_b = Rt * s.x.v_s_b;
+  x.p_s_b.setZero();
+  x.q_s_b.setIdentity();
+  std::vector<Vec3> lms(s.landmarks().size());
+  for (int i = 0; i < s.numLandmarks(); ++i) lms[static_cast<size_t>(i)] = Rt * (s.landmark(i) - s.x.p_s_b);
+  s.reset(s.mechanization(), x, s.landmarkIds(), std::move(lms), std::move(Pn));
+}
+
+FrameChangeJacobian worldToSensorJacobian(const FilterState& s) {
+  using namespace idx;
+  if (isSensorCentric(s.mechanization())) throw std::logic_error("worldToSensor needs a world-centric state");
+  const Mat3 R = s.x.q_s_b.toRotationMatrix();  // R_n_b
+  FrameChangeJacobian J;
+  J.J_motion = Eigen::MatrixXd::Zero(kSensorCentricDim, kWorldCentricDim);
+  J.J_motion.block<3, 3>(kV, kV) = R.transpose();
+  J.J_motion.block<3, 3>(kV, kPsi) = R.transpose() * skew(s.x.v_s_b);
+  J.J_motion.block<3, 3>(kBa, kBa).setIdentity();
+  J.J_motion.block<3, 3>(kBg, kBg).setIdentity();
+  J.J_motion.block<3, 3>(kPns, kP).setIdentity();       // p_n_s = p_n_b
+  J.J_motion.block<3, 3>(kPsiNs, kPsi).setIdentity();   // q_n_s = q_n_b
+  resetToBodyLandmarks(s, R, &J);
+  return J;
+}
+
+Eigen::MatrixXd sensorToWorldMotionJacobian(const MotionState& x) {
+  using namespace idx;
+  const Mat3 R_n_s = x.q_n_s.toRotationMatrix();
+  Eigen::MatrixXd J = Eigen::MatrixXd::Zero(kWorldCentricDim, kSensorCentricDim);
+  // p_n_b = p_n_s + R_n_s p_s_b
+  J.block<3, 3>(kP, kP) = R_n_s;
+  J.block<3, 3>(kP, kPns).setIdentity();
+  J.block<3, 3>(kP, kPsiNs) = -skew(R_n_s * x.p_s_b);
+  // v_n_b = R_n_s v_s_b
+  J.block<3, 3>(kV, kV) = R_n_s;
+  J.block<3, 3>(kV, kPsiNs) = -skew(R_n_s * x.v_s_b);
+  J.block<3, 3>(kBa, kBa).setIdentity();
+  // R_n_b = R_n_s R_s_b -> psi_n_b = psi_n_s + R_n_s psi_s_b
+  J.block<3, 3>(kPsi, kPsi) = R_n_s;
+  J.block<3, 3>(kPsi, kPsiNs).setIdentity();
+  J.block<3, 3>(kBg, kBg).setIdentity();
+  return J;
+}
+
+FrameChangeJacobian sensorToWorldJacobian(const FilterState& s) {
+  using namespace idx;
+  if (!isSensorCentric(s.mechanization())) throw std::logic_error("sensorToWorld needs a sensor-centric state");
+  const Mat3 R_n_s = s.x.q_n_s.toRotationMatrix();
+  FrameChangeJacobian J;
+  J.J_motion = sensorToWorldMotionJacobian(s.x);
+  // Y_n = p_n_s + R_n_s Y_s
+  J.R_l = R_n_s;
+  J.pos_col = kPns;
+  J.A_pos.setIdentity();
+  J.rot_col = kPsiNs;
+  J.A_rot.resize(static_cast<size_t>(s.numLandmarks()));
+  for (int i = 0; i < s.numLandmarks(); ++i) {
+    J.A_rot[static_cast<size_t>(i)] = -skew(R_n_s * s.landmark(i));
+  }
+  return J;
+}
+
+void switchMechanization(FilterState& s, Mechanization target) {
+  const bool from_sc = isSensorCentric(s.mechanization());
+  const bool to_sc = isSensorCentric(target);
+  if (from_sc == to_sc) {
+    s.setMechanizationTag(target);
+    return;
+  }
+  MotionState x;
+  std::vector<Vec3> lms(s.landmarks().size());
+  FrameChangeJacobian J;
+  if (!from_sc) {  // world -> sensor: {s} := current body frame
+    J = worldToSensorJacobian(s);
+    const Mat3 Rt = s.x.q_s_b.conjugate().toRotationMatrix();
+    x.p_n_s = s.x.p_s_b;
+    x.q_n_s = s.x.q_s_b;
+    x.v_s_b = Rt * s.x.v_s_b;
+    for (int i = 0; i < s.numLandmarks(); ++i) lms[static_cast<size_t>(i)] = Rt * (s.landmark(i) - s.x.p_s_b);
+  } else {  // sensor -> world
+    J = sensorToWorldJacobian(s);
+    x.p_s_b = s.x.p_n_s + s.x.q_n_s * s.x.p_s_b;
+    x.q_s_b = (s.x.q_n_s * s.x.q_s_b).normalized();
+    x.v_s_b = s.x.q_n_s * s.x.v_s_b;
+    for (int i = 0; i < s.numLandmarks(); ++i) {
+      lms[static_cast<size_t>(i)] = s.x.p_n_s + s.x.q_n_s * s.landmark(i);
+    }
+  }
+  x.b_a = s.x.b_a;
+  x.b_g = s.x.b_g;
+  Eigen::MatrixXd Pn = applyFrameChange(s.covariance(), J);
+  checkFinite(Pn);
+  s.reset(target, x, s.landmarkIds(), std::move(lms), std::move(Pn));
+}
+
+}  // namespace vi_ekf_slam

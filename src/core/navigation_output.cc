@@ -1,0 +1,65 @@
+#include "vi_ekf_slam/core/navigation_output.h"
+
+#include "vi_ekf_slam/core/frame_change.h"
+#include "vi_ekf_slam/core/matrix_utils.h"
+
+namespace vi_ekf_slam {
+
+Eigen::Matrix<double, 6, 6> NavState::poseCovariance() const {
+  Eigen::Matrix<double, 6, 6> c;
+  c.topLeftCorner<3, 3>() = cov.block<3, 3>(idx::kP, idx::kP);
+  c.topRightCorner<3, 3>() = cov.block<3, 3>(idx::kP, idx::kPsi);
+  c.bottomLeftCorner<3, 3>() = cov.block<3, 3>(idx::kPsi, idx::kP);
+  c.bottomRightCorner<3, 3>() = cov.block<3, 3>(idx::kPsi, idx::kPsi);
+  return c;
+}
+
+NavState navState(const FilterState& s) {
+  NavState out;
+  out.timestamp = s.timestamp;
+  out.b_a = s.x.b_a;
+  out.b_g = s.x.b_g;
+  if (!isSensorCentric(s.mechanization())) {
+    out.p_n_b = s.x.p_s_b;
+    out.v_n_b = s.x.v_s_b;
+    out.q_n_b = s.x.q_s_b;
+    out.cov = s.motionCovariance();
+    return out;
+  }
+  out.p_n_b = s.x.p_n_s + s.x.q_n_s * s.x.p_s_b;
+  out.v_n_b = s.x.q_n_s * s.x.v_s_b;
+  out.q_n_b = (s.x.q_n_s * s.x.q_s_b).normalized();
+  // Only the motion block of the structured Jacobian is needed: O(1) in the map size.
+  const Eigen::MatrixXd J = sensorToWorldMotionJacobian(s.x);
+  out.cov = J * s.motionCovariance() * J.transpose();
+  out.cov = (0.5 * (out.cov + out.cov.transpose())).eval();
+  return out;
+}
+
+std::vector<NavLandmark> navLandmarks(const FilterState& s) {
+  std::vector<NavLandmark> out(static_cast<size_t>(s.numLandmarks()));
+  const Eigen::MatrixXd& P = s.covariance();
+  const bool sc = isSensorCentric(s.mechanization());
+  FrameChangeJacobian J;
+  if (sc) J = sensorToWorldJacobian(s);
+  for (int i = 0; i < s.numLandmarks(); ++i) {
+    auto& o = out[static_cast<size_t>(i)];
+    o.id = s.landmarkIds()[static_cast<size_t>(i)];
+    const int li = s.landmarkIndex(i);
+    if (!sc) {
+      o.p_n_l = s.landmark(i);
+      o.cov = P.block<3, 3>(li, li);
+      continue;
+    }
+    // The landmark rows of the sensor -> world frame change: Y_n = p_n_s + R_n_s Y_s.
+    o.p_n_l = s.x.p_n_s + s.x.q_n_s * s.landmark(i);
+    Eigen::Matrix<double, 3, 9> G;
+    G << J.R_l, J.A_pos, J.A_rot[static_cast<size_t>(i)];
+    const int blocks[3] = {li, J.pos_col, J.rot_col};
+    o.cov = G * gatherBlocks<3>(P, blocks) * G.transpose();
+    o.cov = (0.5 * (o.cov + o.cov.transpose())).eval();
+  }
+  return out;
+}
+
+}  // namespace vi_ekf_slam

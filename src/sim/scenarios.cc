@@ -1,0 +1,70 @@
+#include "vi_ekf_slam/sim/scenarios.h"
+
+#include <cmath>
+
+namespace vi_ekf_slam::sim {
+
+CameraModel paperCamera() {
+  CameraIntrinsics in;
+  in.width = 699;
+  in.height = 540;
+  in.fx = 420.0;
+  in.fy = 420.0;
+  in.cx = 349.0;
+  in.cy = 269.5;
+  in.model = DistortionModel::kRadTan;
+  in.distortion = {-0.12, 0.03, 0.0006, -0.0004, 0.0};
+  return CameraModel(in);
+}
+
+CameraExtrinsics torsoCameraExtrinsics() {
+  CameraExtrinsics T;
+  T.R_b_c << 0, 0, 1, 1, 0, 0, 0, 1, 0;
+  T.p_b_c = Vec3(0.08, 0.0, -0.05);
+  return T;
+}
+
+ImuNoiseParams paperImuNoise() {
+  ImuNoiseParams n;
+  const double mg = 9.81e-3;
+  n.accel_noise_density = 7.5 * mg / std::sqrt(200.0);      // 5.2e-3 m/s^2/sqrt(Hz)
+  n.gyro_noise_density = 0.0056 * M_PI / 180.0;             // 9.8e-5 rad/s/sqrt(Hz)
+  n.accel_random_walk = 1.0e-3;                              // m/s^3/sqrt(Hz)
+  n.gyro_random_walk = 1.0e-5;                               // rad/s^2/sqrt(Hz)
+  return n;
+}
+
+Scenario circleScenario(double duration_s, bool noise, std::uint64_t world_seed) {
+  Scenario sc;
+  const double radius = 6.0;
+  sc.trajectory = std::make_shared<CircleTrajectory>(radius, 0.25, 0.04, duration_s);
+  std::mt19937_64 rng(world_seed);
+  sc.world = cylinderWorld(Vec3(0.0, radius, 0.0), radius + 4.0, -3.0, 1.5, 400, rng);
+  sc.camera = paperCamera();
+  sc.T_b_c = torsoCameraExtrinsics();
+  sc.imu.noise = paperImuNoise();
+  sc.imu.noise_enabled = noise;
+  sc.cam.pixel_noise_px = noise ? 1.0 : 0.0;
+  sc.cam.max_features = 40;
+  return sc;
+}
+
+Scenario wallScenario(double duration_s, bool noise, std::uint64_t world_seed) {
+  Scenario sc;
+  sc.trajectory = std::make_shared<LissajousTrajectory>(Vec3::Zero(), Vec3(0.3, 0.4, 0.2), Vec3(1.1, 0.8, 1.7),
+                                                        Vec3(0.1, 0.08, 0.15), Vec3(0.9, 1.3, 0.7), duration_s);
+  std::mt19937_64 rng(world_seed);
+  std::uniform_real_distribution<double> depth(5.0, 8.0), lateral(-2.5, 2.5), vertical(-1.8, 1.8);
+  for (int i = 0; i < 25; ++i) {
+    const double x = depth(rng), y = lateral(rng), z = vertical(rng);
+    sc.world.push_back({i, Vec3(x, y, z)});
+  }
+  sc.camera = paperCamera();
+  sc.T_b_c = torsoCameraExtrinsics();
+  sc.imu.noise = paperImuNoise();
+  sc.imu.noise_enabled = noise;
+  sc.cam.pixel_noise_px = noise ? 1.0 : 0.0;
+  return sc;
+}
+
+}  // namespace vi_ekf_slam::sim

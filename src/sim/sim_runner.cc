@@ -1,0 +1,50 @@
+#include "vi_ekf_slam/sim/sim_runner.h"
+
+#include <cmath>
+
+namespace vi_ekf_slam::sim {
+
+NavState trueNavState(const Trajectory& trajectory, double t) {
+  const TrajectorySample s = trajectory.sample(t);
+  NavState n;
+  n.timestamp = t;
+  n.p_n_b = s.p_n_b;
+  n.v_n_b = s.v_n_b;
+  n.q_n_b = s.q_n_b;
+  return n;
+}
+
+SimRun runSimulation(const Scenario& sc, const EkfSlamConfig& config, const NavState& initial,
+                     std::mt19937_64& rng, const FrameCallback& callback) {
+  const Trajectory& traj = *sc.trajectory;
+  const ImuSequence imu = simulateImu(traj, sc.imu, rng);
+  EkfSlam filter(config, sc.camera, sc.T_b_c);
+  filter.initialize(initial);
+  SimRun run;
+  const double cam_dt = 1.0 / sc.cam.rate_hz;
+  int next_frame = 1;  // the first frame comes one camera period after the start
+  auto frameTime = [&](int k) { return initial.timestamp + k * cam_dt; };
+  for (size_t k = 0; k < imu.samples.size(); ++k) {
+    filter.addImu(imu.samples[k]);
+    while (frameTime(next_frame) <= imu.samples[k].timestamp + 1e-12 &&
+           frameTime(next_frame) <= traj.endTime()) {
+      const double t = frameTime(next_frame++);
+      FrameRecord rec;
+      rec.t = t;
+      rec.truth = traj.sample(t);
+      const size_t bias_index = std::min(k, imu.true_accel_bias.size() - 1);
+      rec.true_accel_bias = imu.true_accel_bias[bias_index];
+      rec.true_gyro_bias = imu.true_gyro_bias[bias_index];
+      CameraFrame frame = observe(rec.truth, sc.world, sc.camera, sc.T_b_c, sc.cam, &rng);
+      rec.result = filter.processFrame(frame);
+      rec.estimate = filter.navState();
+      rec.landmarks_in_state = filter.state().numLandmarks();
+      if (callback) callback(filter, rec);
+      run.frames.push_back(std::move(rec));
+    }
+  }
+  run.final_landmarks = filter.landmarks();
+  return run;
+}
+
+}  // namespace vi_ekf_slam::sim

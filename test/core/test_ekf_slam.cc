@@ -1,0 +1,151 @@
+#include <gtest/gtest.h>
+
+#include "test_helpers.h"
+#include "vi_ekf_slam/core/ekf_slam.h"
+#include "vi_ekf_slam/sim/scenarios.h"
+
+using namespace vi_ekf_slam;
+
+struct ConvergenceCase {
+  Mechanization mechanization;
+  double max_position_m;
+  double max_rotation_rad;
+  double max_median_landmark_m;
+};
+
+class EkfSlamConvergence : public ::testing::TestWithParam<ConvergenceCase> {};
+
+// A short noise-free simulated run (25 landmarks in view, a known excited trajectory, start at
+// the truth) converges to the truth: landmarks start at the paper's fixed 8 m depth (true depths
+// 5-8 m) and must move to their true positions while the pose follows the truth.
+// Measured (15 s): sensor-centric 0.9 mm / 0.12 mrad / 1.7 mm landmarks; world-centric
+// 5 mm / 3.6 mrad / 23 mm: the world-centric filter lets the wrongly initialized landmarks pull
+// its attitude (the inconsistency the paper describes), so its bounds are wider.
+TEST_P(EkfSlamConvergence, NoiseFreeRunConvergesToTruth) {
+  const ConvergenceCase c = GetParam();
+  const sim::Scenario sc = sim::wallScenario(15.0, /*noise=*/false, 1);
+  EkfSlamConfig cfg;
+  cfg.mechanization = c.mechanization;
+  cfg.imu_noise = sc.imu.noise;
+  cfg.landmark_timeout_s = -1.0;
+  std::mt19937_64 rng(27);
+  const sim::SimRun run = sim::runSimulation(sc, cfg, sim::trueNavState(*sc.trajectory, 0.0), rng);
+  ASSERT_GT(run.frames.size(), 400u);
+  const auto& last = run.frames.back();
+  EXPECT_TRUE(last.result.processed);
+  EXPECT_EQ(last.result.update.accepted, 25);
+  EXPECT_LT((last.estimate.p_n_b - last.truth.p_n_b).norm(), c.max_position_m);
+  EXPECT_LT(rotationError(last.estimate.q_n_b, last.truth.q_n_b).norm(), c.max_rotation_rad);
+  std::vector<double> errs;
+  for (const auto& l : run.final_landmarks) errs.push_back((l.p_n_l - sc.world[l.id].p_n).norm());
+  ASSERT_EQ(errs.size(), 25u);
+  std::sort(errs.begin(), errs.end());
+  EXPECT_LT(errs[errs.size() / 2], c.max_median_landmark_m);
+  // Every landmark moved from its 8 m initial guess to within a few centimetres.
+  EXPECT_LT(errs.back(), 4.0 * c.max_median_landmark_m);
+}
+
+INSTANTIATE_TEST_SUITE_P(
+    Mechanizations, EkfSlamConvergence,
+    ::testing::Values(ConvergenceCase{Mechanization::kWorldCentric, 0.02, 0.008, 0.05},
+                      ConvergenceCase{Mechanization::kSensorCentric, 0.005, 0.001, 0.005},
+                      ConvergenceCase{Mechanization::kSensorCentricComposition, 0.005, 0.001, 0.005}));
+
+TEST(EkfSlam, RejectsImpossibleConfiguration) {
+  EkfSlamConfig cfg;
+  cfg.update.pixel_noise_px = -1.0;
+  cfg.max_landmarks = 0;
+  try {
+    EkfSlam f(cfg, sim::paperCamera(), sim::torsoCameraExtrinsics());
+    FAIL() << "expected an exception";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("pixel_noise_px"), std::string::npos);
+    EXPECT_NE(std::string(e.what()).find("max_landmarks"), std::string::npos);
+  }
+  CameraExtrinsics bad;
+  bad.R_b_c = 2.0 * Mat3::Identity();
+  EXPECT_THROW(EkfSlam(EkfSlamConfig(), sim::paperCamera(), bad), std::invalid_argument);
+}
+
+TEST(EkfSlam, BadImuSamplesAreDroppedAndFramesWaitForImu) {
+  EkfSlam f(EkfSlamConfig(), sim::paperCamera(), sim::torsoCameraExtrinsics());
+  CameraFrame frame;
+  frame.timestamp = 0.05;
+  EXPECT_FALSE(f.processFrame(frame).processed);  // not initialized
+  NavState init;
+  f.initialize(init);
+  ImuData d;
+  d.am = Vec3(0, 0, -9.81);
+  d.timestamp = 0.0;
+  EXPECT_TRUE(f.addImu(d));
+  EXPECT_FALSE(f.addImu(d));  // repeated stamp
+  d.timestamp = -0.01;
+  EXPECT_FALSE(f.addImu(d));  // backwards
+  d.timestamp = 0.01;
+  d.am.x() = std::numeric_limits<double>::infinity();
+  EXPECT_FALSE(f.addImu(d));  // non-finite
+  d.am.x() = 0.0;
+  EXPECT_TRUE(f.addImu(d));
+  const FrameResult early = f.processFrame(frame);
+  EXPECT_FALSE(early.processed);  // IMU only reaches 0.01 s
+  EXPECT_FALSE(early.error.empty());
+  d.timestamp = 0.06;
+  EXPECT_TRUE(f.addImu(d));
+  EXPECT_TRUE(f.processFrame(frame).processed);
+  EXPECT_TRUE(f.navState().p_n_b.allFinite());
+  EXPECT_LT(f.navState().p_n_b.norm(), 1e-9);
+  frame.timestamp = 0.04;
+  EXPECT_FALSE(f.processFrame(frame).processed);  // older than the state
+}
+
+TEST(EkfSlam, MapIsBoundedAndStaleLandmarksAreRemoved) {
+  EkfSlamConfig cfg;
+  cfg.max_landmarks = 5;
+  cfg.landmark_timeout_s = 0.1;
+  EkfSlam f(cfg, sim::paperCamera(), sim::torsoCameraExtrinsics());
+  f.initialize(NavState());
+  ImuData d;
+  d.am = Vec3(0, 0, -9.81);
+  for (int k = 0; k <= 100; ++k) {
+    d.timestamp = 0.005 * k;
+    f.addImu(d);
+  }
+  CameraFrame frame;
+  frame.timestamp = 0.1;
+  for (int i = 0; i < 8; ++i) frame.features.push_back({i, Eigen::Vector2d(100 + 50 * i, 200)});
+  FrameResult r = f.processFrame(frame);
+  EXPECT_EQ(r.new_ids.size(), 5u);
+  EXPECT_EQ(f.state().numLandmarks(), 5);
+  frame.timestamp = 0.3;  // 0.2 s later, none of the old ids: all time out
+  frame.features = {{50, Eigen::Vector2d(300, 300)}};
+  r = f.processFrame(frame);
+  EXPECT_EQ(r.removed_ids.size(), 5u);
+  EXPECT_EQ(f.state().numLandmarks(), 1);
+  EXPECT_EQ(f.state().landmarkIds()[0], 50);
+}
+
+TEST(EkfSlam, SwitchingMechanizationWhileRunningKeepsPoseAndMap) {
+  const sim::Scenario sc = sim::circleScenario(4.0, true, 2);
+  EkfSlamConfig cfg;
+  cfg.mechanization = Mechanization::kWorldCentric;
+  cfg.imu_noise = sc.imu.noise;
+  std::mt19937_64 rng(28);
+  int switches = 0;
+  sim::runSimulation(sc, cfg, sim::trueNavState(*sc.trajectory, 0.0), rng,
+                     [&](EkfSlam& filter, sim::FrameRecord& rec) {
+                       if (rec.result.processed && (switches < 3) && rec.t > 1.0 + switches) {
+                         const NavState before = filter.navState();
+                         const auto lm_before = filter.landmarks();
+                         const Mechanization next = switches % 2 == 0 ? Mechanization::kSensorCentricComposition
+                                                                      : Mechanization::kWorldCentric;
+                         filter.setMechanization(next);
+                         ++switches;
+                         const NavState after = filter.navState();
+                         EXPECT_EQ(filter.mechanization(), next);
+                         EXPECT_LT((after.p_n_b - before.p_n_b).norm(), 1e-9);
+                         EXPECT_LT(test::maxAbs(after.cov - before.cov), 1e-9);
+                         EXPECT_EQ(filter.landmarks().size(), lm_before.size());
+                       }
+                     });
+  EXPECT_EQ(switches, 3);
+}

@@ -1,0 +1,146 @@
+#include <gtest/gtest.h>
+
+#include "test_helpers.h"
+#include "vi_ekf_slam/core/frame_change.h"
+#include "vi_ekf_slam/core/navigation_output.h"
+
+using namespace vi_ekf_slam;
+
+namespace {
+
+/// Numerical Jacobian of a state -> state map (error state in, error state out).
+Eigen::MatrixXd numericFrameChangeJacobian(const FilterState& s0,
+                                           const std::function<void(FilterState&)>& change) {
+  FilterState ref = s0;
+  change(ref);
+  return test::numericJacobian(
+      [&](const Eigen::VectorXd& d) -> Eigen::VectorXd {
+        FilterState s = s0;
+        s.boxplus(d);
+        change(s);
+        return s.boxminus(ref);
+      },
+      s0.dim());
+}
+
+/// Nav-frame pose, velocity and landmarks with covariances must be identical.
+void expectSameNavigationView(const FilterState& a, const FilterState& b, double tol) {
+  const NavState na = navState(a), nb = navState(b);
+  EXPECT_LT((na.p_n_b - nb.p_n_b).norm(), tol);
+  EXPECT_LT((na.v_n_b - nb.v_n_b).norm(), tol);
+  EXPECT_LT(rotationError(na.q_n_b, nb.q_n_b).norm(), tol);
+  EXPECT_LT(test::maxAbs(na.cov - nb.cov), tol);
+  const auto la = navLandmarks(a), lb = navLandmarks(b);
+  ASSERT_EQ(la.size(), lb.size());
+  for (size_t i = 0; i < la.size(); ++i) {
+    EXPECT_EQ(la[i].id, lb[i].id);
+    EXPECT_LT((la[i].p_n_l - lb[i].p_n_l).norm(), tol);
+    EXPECT_LT(test::maxAbs(la[i].cov - lb[i].cov), tol);
+  }
+}
+
+}  // namespace
+
+TEST(Composition, JacobianMatchesNumeric) {
+  std::mt19937_64 rng(14);
+  const FilterState s0 = test::randomState(Mechanization::kSensorCentricComposition, 4, rng);
+  const Eigen::MatrixXd Jn = numericFrameChangeJacobian(s0, [](FilterState& s) { compose(s); });
+  const Eigen::MatrixXd J = denseJacobian(compositionJacobian(s0), s0.numLandmarks());
+  EXPECT_LT(test::maxAbs(Jn - J), 1e-7) << "\n" << Jn - J;
+}
+
+TEST(Composition, StructuredProductEqualsDenseProduct) {
+  std::mt19937_64 rng(15);
+  FilterState s = test::randomState(Mechanization::kSensorCentricComposition, 7, rng);
+  const Eigen::MatrixXd J = denseJacobian(compositionJacobian(s), s.numLandmarks());
+  const Eigen::MatrixXd expected = J * s.covariance() * J.transpose();
+  EXPECT_LT(test::maxAbs(applyFrameChange(s.covariance(), compositionJacobian(s)) - expected), 1e-13);
+}
+
+TEST(Composition, PreservesNavigationFramePoseAndMapAndResetsSensorPose) {
+  std::mt19937_64 rng(16);
+  FilterState s = test::randomState(Mechanization::kSensorCentricComposition, 6, rng);
+  const FilterState before = s;
+  compose(s);
+  expectSameNavigationView(before, s, 1e-9);
+  EXPECT_LT(s.x.p_s_b.norm(), 1e-15);
+  EXPECT_LT(rotationError(s.x.q_s_b, Quat::Identity()).norm(), 1e-15);
+  const Eigen::MatrixXd& P = s.covariance();
+  // The pose of {b} in the new {s} is exact: its rows and columns are zero.
+  EXPECT_EQ(test::maxAbs(P.middleRows<3>(idx::kP)), 0.0);
+  EXPECT_EQ(test::maxAbs(P.middleRows<3>(idx::kPsi)), 0.0);
+  EXPECT_EQ((s.x.b_a - before.x.b_a).norm(), 0.0);
+  EXPECT_EQ((s.x.b_g - before.x.b_g).norm(), 0.0);
+}
+
+TEST(MechanizationSwitch, WorldToSensorJacobianMatchesNumeric) {
+  std::mt19937_64 rng(17);
+  const FilterState s0 = test::randomState(Mechanization::kWorldCentric, 3, rng);
+  const Eigen::MatrixXd Jn = numericFrameChangeJacobian(
+      s0, [](FilterState& s) { switchMechanization(s, Mechanization::kSensorCentric); });
+  const Eigen::MatrixXd J = denseJacobian(worldToSensorJacobian(s0), s0.numLandmarks());
+  ASSERT_EQ(J.rows(), 21 + 9);
+  EXPECT_LT(test::maxAbs(Jn - J), 1e-7) << "\n" << Jn - J;
+}
+
+TEST(MechanizationSwitch, SensorToWorldJacobianMatchesNumeric) {
+  std::mt19937_64 rng(18);
+  const FilterState s0 = test::randomState(Mechanization::kSensorCentric, 3, rng);
+  const Eigen::MatrixXd Jn = numericFrameChangeJacobian(
+      s0, [](FilterState& s) { switchMechanization(s, Mechanization::kWorldCentric); });
+  const Eigen::MatrixXd J = denseJacobian(sensorToWorldJacobian(s0), s0.numLandmarks());
+  ASSERT_EQ(J.rows(), 15 + 9);
+  EXPECT_LT(test::maxAbs(Jn - J), 1e-7) << "\n" << Jn - J;
+}
+
+TEST(MechanizationSwitch, RoundTripsPreserveNavigationQuantitiesAndMap) {
+  std::mt19937_64 rng(19);
+  FilterState w = test::randomState(Mechanization::kWorldCentric, 8, rng);
+  const FilterState w0 = w;
+  switchMechanization(w, Mechanization::kSensorCentricComposition);
+  EXPECT_EQ(w.mechanization(), Mechanization::kSensorCentricComposition);
+  EXPECT_EQ(w.dim(), 21 + 24);
+  expectSameNavigationView(w0, w, 1e-9);
+  switchMechanization(w, Mechanization::kWorldCentric);
+  expectSameNavigationView(w0, w, 1e-9);
+  // World -> sensor -> world is the identity on the state and the covariance.
+  EXPECT_LT(w.boxminus(w0).norm(), 1e-12);
+  EXPECT_LT(test::maxAbs(w.covariance() - w0.covariance()), 1e-12);
+  EXPECT_EQ(w.landmarkIds(), w0.landmarkIds());
+
+  FilterState s = test::randomState(Mechanization::kSensorCentric, 5, rng);
+  const FilterState s0 = s;
+  switchMechanization(s, Mechanization::kWorldCentric);
+  expectSameNavigationView(s0, s, 1e-9);
+  switchMechanization(s, Mechanization::kSensorCentric);
+  expectSameNavigationView(s0, s, 1e-9);
+}
+
+TEST(MechanizationSwitch, BetweenSensorCentricVariantsOnlyTheTagChanges) {
+  std::mt19937_64 rng(20);
+  FilterState s = test::randomState(Mechanization::kSensorCentric, 2, rng);
+  const FilterState s0 = s;
+  switchMechanization(s, Mechanization::kSensorCentricComposition);
+  EXPECT_EQ(s.mechanization(), Mechanization::kSensorCentricComposition);
+  EXPECT_EQ(s.boxminus(s0).norm(), 0.0);
+}
+
+TEST(NavigationOutput, SensorCentricCovarianceMatchesNumericPropagation) {
+  // navState's covariance is J P J^T with J the derivative of the nav pose w.r.t. the state.
+  std::mt19937_64 rng(21);
+  const FilterState s0 = test::randomState(Mechanization::kSensorCentric, 2, rng);
+  const NavState n0 = navState(s0);
+  const Eigen::MatrixXd J = test::numericJacobian(
+      [&](const Eigen::VectorXd& d) -> Eigen::VectorXd {
+        FilterState s = s0;
+        s.boxplus(d);
+        const NavState n = navState(s);
+        Eigen::VectorXd e(15);
+        e << n.p_n_b - n0.p_n_b, n.v_n_b - n0.v_n_b, n.b_a - n0.b_a, rotationError(n.q_n_b, n0.q_n_b),
+            n.b_g - n0.b_g;
+        return e;
+      },
+      s0.dim());
+  const Eigen::MatrixXd expected = J * s0.covariance() * J.transpose();
+  EXPECT_LT(test::maxAbs(Eigen::MatrixXd(n0.cov) - expected), 1e-9);
+}

@@ -1,0 +1,56 @@
+#include <gtest/gtest.h>
+
+#include "test_helpers.h"
+#include "vi_ekf_slam/core/measurement_model.h"
+
+using namespace vi_ekf_slam;
+
+class MeasurementModelTest : public ::testing::TestWithParam<Mechanization> {};
+
+// H = J_pi [J_p 0 J_psi ... J_Y ...] (eq. 30) against numerical differentiation of eq. (29)
+// with respect to the full error state.
+TEST_P(MeasurementModelTest, JacobianMatchesNumeric) {
+  std::mt19937_64 rng(7);
+  const CameraModel cam = test::paperCamera();
+  const CameraExtrinsics T = test::forwardCamera();
+  for (int trial = 0; trial < 5; ++trial) {
+    const FilterState s0 = test::randomState(GetParam(), 4, rng);
+    for (int i = 0; i < s0.numLandmarks(); ++i) {
+      Eigen::Vector2d uv;
+      ObservationJacobians J;
+      ASSERT_TRUE(predictObservation(s0.x, s0.landmark(i), cam, T, &uv, &J));
+      Eigen::MatrixXd H = Eigen::MatrixXd::Zero(2, s0.dim());
+      H.middleCols<3>(idx::kP) = J.H_p;
+      H.middleCols<3>(idx::kPsi) = J.H_psi;
+      H.middleCols<3>(s0.landmarkIndex(i)) = J.H_l;
+      const Eigen::MatrixXd Hn = test::numericJacobian(
+          [&](const Eigen::VectorXd& d) -> Eigen::VectorXd {
+            FilterState s = s0;
+            s.boxplus(d);
+            Eigen::Vector2d u;
+            predictObservation(s.x, s.landmark(i), cam, T, &u);
+            return u;
+          },
+          s0.dim());
+      EXPECT_LT(test::maxAbs(Hn - H), 1e-5 * test::maxAbs(H)) << "\n" << Hn - H;
+    }
+  }
+}
+
+INSTANTIATE_TEST_SUITE_P(Mechanizations, MeasurementModelTest,
+                         ::testing::Values(Mechanization::kWorldCentric, Mechanization::kSensorCentric));
+
+TEST(MeasurementModel, PredictsTheSimulatedPixel) {
+  // A landmark straight ahead of the camera projects onto the principal point.
+  const CameraModel cam = test::paperCamera();
+  const CameraExtrinsics T = test::forwardCamera();
+  MotionState x;
+  x.p_s_b = Vec3(1, 2, 3);
+  x.q_s_b = expQuat(Vec3(0, 0, 0.5));
+  const Vec3 p_c(0, 0, 5);
+  const Vec3 p_s = x.q_s_b * (T.R_b_c * p_c + T.p_b_c) + x.p_s_b;
+  Eigen::Vector2d uv;
+  ASSERT_TRUE(predictObservation(x, p_s, cam, T, &uv));
+  EXPECT_LT((uv - Eigen::Vector2d(349.0, 269.5)).norm(), 1e-9);
+  EXPECT_LT((landmarkInCamera(x, p_s, T) - p_c).norm(), 1e-12);
+}

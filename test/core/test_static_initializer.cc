@@ -1,0 +1,64 @@
+#include <gtest/gtest.h>
+
+#include "test_helpers.h"
+#include "vi_ekf_slam/core/imu_propagation.h"
+#include "vi_ekf_slam/core/static_initializer.h"
+
+using namespace vi_ekf_slam;
+
+TEST(StaticInitializer, RecoversRollPitchAndGyroBias) {
+  const Quat q_true = expQuat(Vec3(0.3, -0.2, 1.1));  // any heading
+  const Vec3 bg(0.01, -0.02, 0.005);
+  const Vec3 f = -(q_true.conjugate() * gravityInNav(9.81));
+  StaticInitializer init;
+  std::mt19937_64 rng(26);
+  std::normal_distribution<double> n(0.0, 0.02);
+  std::optional<StaticInitResult> r;
+  for (int k = 0; k < 400 && !r; ++k) {
+    ImuData d;
+    d.timestamp = 0.005 * k;
+    d.am = f + Vec3(n(rng), n(rng), n(rng));
+    d.wm = bg + 0.1 * Vec3(n(rng), n(rng), n(rng));
+    r = init.addImu(d);
+  }
+  ASSERT_TRUE(r.has_value());
+  EXPECT_NEAR(r->timestamp, 1.0, 0.006);
+  // Gravity direction (roll, pitch) matches to the noise level; yaw is set to zero.
+  const Vec3 down_true = q_true.conjugate() * Vec3::UnitZ();
+  const Vec3 down_est = r->q_n_b.conjugate() * Vec3::UnitZ();
+  EXPECT_LT(std::acos(std::min(1.0, down_true.dot(down_est))), 2e-3);
+  const Vec3 x_n = r->q_n_b * Vec3::UnitX();
+  EXPECT_NEAR(std::atan2(x_n.y(), x_n.x()), 0.0, 1e-9);
+  EXPECT_LT((r->b_g - bg).norm(), 1e-3);
+}
+
+TEST(StaticInitializer, WaitsWhileMoving) {
+  StaticInitializer init;
+  for (int k = 0; k < 1000; ++k) {
+    ImuData d;
+    d.timestamp = 0.005 * k;
+    d.am = Vec3(0.0, 0.0, -9.81) + Vec3(2.0 * std::sin(0.05 * k), 0, 0);
+    d.wm = Vec3(0.0, 0.5 * std::cos(0.05 * k), 0.0);
+    EXPECT_FALSE(init.addImu(d).has_value());
+  }
+}
+
+TEST(StaticInitializer, IgnoresNonFiniteAndOutOfOrderSamples) {
+  StaticInitializer init;
+  ImuData d;
+  d.timestamp = 1.0;
+  d.am = Vec3(std::nan(""), 0, 0);
+  EXPECT_FALSE(init.addImu(d).has_value());
+  std::optional<StaticInitResult> r;
+  for (int k = 0; k < 300 && !r; ++k) {
+    d.timestamp = 1.0 + 0.005 * k;
+    d.am = Vec3(0, 0, -9.81);
+    d.wm.setZero();
+    r = init.addImu(d);
+    ImuData old = d;
+    old.timestamp -= 0.5;  // out of order: ignored
+    EXPECT_FALSE(init.addImu(old).has_value());
+  }
+  ASSERT_TRUE(r.has_value());
+  EXPECT_LT(rotationError(r->q_n_b, Quat::Identity()).norm(), 1e-9);
+}
