@@ -16,7 +16,14 @@ DEVEL    := $(WS)/devel
 BIN      := $(DEVEL)/lib/vi_ekf_slam
 CATKIN   := cd $(WS) && catkin_make -j$(JOBS) -DCMAKE_BUILD_TYPE=Release -DDATA_DIR=$(DATA_DIR)
 
-.PHONY: all deps workspace build test demo clean help
+.PHONY: all deps workspace build test demo study clean help
+
+# make study [TRAJECTORY=file.txt] [RUNS=50] [SEED=1] [OUT=results/study] [CONFIGS=all|paper|a,b]
+TRAJECTORY ?= builtin
+RUNS       ?= 50
+SEED       ?= 1
+CONFIGS    ?= all
+OUT        ?= results/study/$(basename $(notdir $(TRAJECTORY)))
 
 all: build
 
@@ -24,6 +31,7 @@ help:
 	@echo "make demo   - install, build, run the main job (results table + plots)"
 	@echo "make test   - install, build, run all tests (non-zero exit on failure)"
 	@echo "make build  - install missing packages and build in $(WS)"
+	@echo "make study  - Monte-Carlo consistency study (TRAJECTORY=builtin|file.txt RUNS= SEED= OUT=)"
 	@echo "make clean  - remove the build workspace"
 
 deps:
@@ -46,6 +54,11 @@ test: build
 
 demo: build
 	$(BIN)/vi_ekf_slam_simulate_short
+
+# The plots of the built-in walk and of the TUM corridor are copied to docs/img for the README.
+study: build
+	$(BIN)/vi_ekf_slam_study --trajectory $(TRAJECTORY) --runs $(RUNS) --seed $(SEED) --configs $(CONFIGS) --out $(OUT)
+	python3 tools/plot_study.py $(OUT) $(if $(filter builtin %tum_corridor1_512_16_okvis.txt,$(TRAJECTORY)),--docs docs/img --prefix study_$(basename $(notdir $(TRAJECTORY))))
 
 clean:
 	rm -rf $(WS)

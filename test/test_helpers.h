@@ -40,7 +40,9 @@ inline Eigen::MatrixXd randomSpd(int n, std::mt19937_64& rng, double scale = 1.0
   return 0.5 * (M + M.transpose());  // exactly symmetric, as a filter covariance is kept
 }
 
-/// A state with N landmarks in front of the forward camera and a random SPD covariance.
+/// A state with N landmarks in front of the forward camera and a random SPD covariance; odd
+/// landmarks are anchored inverse-depth points (anchor near the current camera), even ones are
+/// Cartesian, so every Jacobian test covers both parameterizations.
 inline FilterState randomState(Mechanization m, int N, std::mt19937_64& rng) {
   FilterState s(m);
   s.x.p_s_b = randomVec(rng, 2.0);
@@ -61,7 +63,15 @@ inline FilterState randomState(Mechanization m, int N, std::mt19937_64& rng) {
     const double d = depth(rng);
     const Vec3 p_c(lateral(rng) * d, lateral(rng) * d, d);
     const Vec3 p_s = s.x.q_s_b * (T.R_b_c * p_c + T.p_b_c) + s.x.p_s_b;
-    s.appendLandmark(100 + i, p_s, 0.01 * Mat3::Identity(), Eigen::MatrixXd::Zero(3, s.dim()));
+    Landmark lm = Landmark::cartesian(p_s);
+    if (i % 2 == 1) {
+      lm.kind = LandmarkKind::kInverseDepth;
+      lm.p_s_a = s.x.p_s_b + s.x.q_s_b * T.p_b_c + randomVec(rng, 0.3);
+      lm.R_s_a = s.x.q_s_b.toRotationMatrix() * T.R_b_c * expSO3(randomVec(rng, 0.1));
+      const Vec3 p_a = lm.R_s_a.transpose() * (p_s - lm.p_s_a);
+      lm.l = Vec3(p_a.x() / p_a.z(), p_a.y() / p_a.z(), 1.0 / p_a.z());
+    }
+    s.appendLandmark(100 + i, lm, 0.01 * Mat3::Identity(), Eigen::MatrixXd::Zero(3, s.dim()));
   }
   s.setCovariance(randomSpd(s.dim(), rng, 0.01));
   return s;

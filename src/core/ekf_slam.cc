@@ -118,6 +118,13 @@ bool EkfSlam::initializeLandmark(const FeatureObservation& obs) {
       p.pixel_noise_px = config_.update.pixel_noise_px;
       return initializeLandmarkFixedDepth(state_, obs, camera_, T_b_c_, p);
     }
+    case LandmarkInitMethod::kInverseDepth: {
+      InverseDepthParams p;
+      p.initial_depth_m = config_.inverse_depth_initial_m;
+      p.inverse_depth_sigma = config_.inverse_depth_sigma;
+      p.pixel_noise_px = config_.update.pixel_noise_px;
+      return initializeLandmarkInverseDepth(state_, obs, camera_, T_b_c_, p);
+    }
   }
   return false;
 }

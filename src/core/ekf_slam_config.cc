@@ -21,8 +21,17 @@ std::string toString(LandmarkInitMethod m) {
   switch (m) {
     case LandmarkInitMethod::kFixedDepth:
       return "fixed_depth";
+    case LandmarkInitMethod::kInverseDepth:
+      return "inverse_depth";
   }
   return "unknown";
+}
+
+std::optional<LandmarkInitMethod> landmarkInitFromString(const std::string& s) {
+  for (auto m : {LandmarkInitMethod::kFixedDepth, LandmarkInitMethod::kInverseDepth}) {
+    if (toString(m) == s) return m;
+  }
+  return std::nullopt;
 }
 
 namespace {
@@ -49,6 +58,8 @@ std::string EkfSlamConfig::validate() const {
   }
   requirePositive(err, "landmark_depth_m [m]", landmark_depth_m);
   requirePositive(err, "landmark_depth_sigma_m [m]", landmark_depth_sigma_m);
+  requirePositive(err, "inverse_depth_initial_m [m]", inverse_depth_initial_m);
+  requirePositive(err, "inverse_depth_sigma [1/m]", inverse_depth_sigma);
   if (max_landmarks < 1) err << "max_landmarks must be >= 1 (got " << max_landmarks << ")\n";
   if (composition_new_landmarks < 0) err << "composition_new_landmarks must be >= 0\n";
   if (!std::isfinite(landmark_timeout_s)) err << "landmark_timeout_s must be finite (use < 0 for never)\n";

@@ -48,7 +48,7 @@ void FilterState::rebuildIndex() {
   for (size_t i = 0; i < landmark_ids_.size(); ++i) index_of_id_[landmark_ids_[i]] = static_cast<int>(i);
 }
 
-void FilterState::appendLandmark(std::int64_t id, const Vec3& p_s_l, const Eigen::Matrix3d& P_ll,
+void FilterState::appendLandmark(std::int64_t id, const Landmark& lm, const Eigen::Matrix3d& P_ll,
                                  const Eigen::MatrixXd& P_l_state) {
   if (findLandmark(id)) throw std::invalid_argument("appendLandmark: id already in the map");
   flush();
@@ -61,7 +61,7 @@ void FilterState::appendLandmark(std::int64_t id, const Vec3& p_s_l, const Eigen
   P_.block(0, n, n, 3) = P_l_state.transpose();
   P_.block<3, 3>(n, n) = 0.5 * (P_ll + P_ll.transpose());
   landmark_ids_.push_back(id);
-  landmarks_.push_back(p_s_l);
+  landmarks_.push_back(lm);
   index_of_id_[id] = numLandmarks() - 1;
 }
 
@@ -75,7 +75,7 @@ void FilterState::removeLandmarks(std::vector<int> indices) {
   keep_rows.reserve(static_cast<size_t>(dim()));
   for (int r = 0; r < motionDim(); ++r) keep_rows.push_back(r);
   std::vector<std::int64_t> ids;
-  std::vector<Vec3> lms;
+  std::vector<Landmark> lms;
   size_t k = 0;
   for (int i = 0; i < numLandmarks(); ++i) {
     if (k < indices.size() && indices[k] == i) {
@@ -166,7 +166,7 @@ void FilterState::boxplus(const Eigen::VectorXd& dx) {
     x.p_n_s += dx.segment<3>(idx::kPns);
     x.q_n_s = (expQuat(dx.segment<3>(idx::kPsiNs)) * x.q_n_s).normalized();
   }
-  for (int i = 0; i < numLandmarks(); ++i) landmarks_[static_cast<size_t>(i)] += dx.segment<3>(landmarkIndex(i));
+  for (int i = 0; i < numLandmarks(); ++i) landmarks_[static_cast<size_t>(i)].l += dx.segment<3>(landmarkIndex(i));
 }
 
 Eigen::VectorXd FilterState::boxminus(const FilterState& other) const {
@@ -184,13 +184,16 @@ Eigen::VectorXd FilterState::boxminus(const FilterState& other) const {
     e.segment<3>(idx::kPsiNs) = rotationError(x.q_n_s, other.x.q_n_s);
   }
   for (int i = 0; i < numLandmarks(); ++i) {
-    e.segment<3>(landmarkIndex(i)) = landmark(i) - other.landmark(i);
+    // Compare the points in the other landmark's parameterization (anchors may differ after a
+    // frame change of a perturbed state).
+    const Landmark& o = other.landmark(i);
+    e.segment<3>(landmarkIndex(i)) = o.paramsOf(landmark(i).position()) - o.l;
   }
   return e;
 }
 
 void FilterState::reset(Mechanization m, const MotionState& xs, std::vector<std::int64_t> ids,
-                        std::vector<Vec3> lms, Eigen::MatrixXd P) {
+                        std::vector<Landmark> lms, Eigen::MatrixXd P) {
   const int n = vi_ekf_slam::motionDim(m) + 3 * static_cast<int>(ids.size());
   if (lms.size() != ids.size() || P.rows() != n || P.cols() != n) {
     throw std::invalid_argument("FilterState::reset: inconsistent sizes");

@@ -18,14 +18,37 @@ Eigen::MatrixXd multiplyByTransposeOnRight(const Eigen::MatrixXd& M, const Frame
   out.leftCols(m_out).noalias() = M.leftCols(m_in) * J.J_motion.transpose();
   const auto M_pos = M.middleCols<3>(J.pos_col);
   const auto M_rot = M.middleCols<3>(J.rot_col);
-  const Eigen::MatrixXd M_pos_A = M_pos * J.A_pos.transpose();
   for (int i = 0; i < N; ++i) {
+    const size_t k = static_cast<size_t>(i);
     auto o = out.middleCols<3>(m_out + 3 * i);
-    o.noalias() = M.middleCols<3>(m_in + 3 * i) * J.R_l.transpose();
-    o += M_pos_A;
-    o.noalias() += M_rot * J.A_rot[static_cast<size_t>(i)].transpose();
+    o.noalias() = M.middleCols<3>(m_in + 3 * i) * J.L[k].transpose();
+    o.noalias() += M_pos * J.A_pos[k].transpose();
+    o.noalias() += M_rot * J.A_rot[k].transpose();
   }
   return out;
+}
+
+/// Landmark rows of a frame change whose points move as y' = R y + t with the point-level
+/// derivatives A_pos_point, A_rot_point w.r.t. the motion blocks. For an inverse-depth landmark
+/// l is unchanged (its anchor moves), so its error maps through dl/dy' of the moved anchor.
+void setLandmarkRows(FrameChangeJacobian* J, size_t i, const Landmark& lm, const Mat3& R, const Mat3& A_pos_point,
+                     const Mat3& A_rot_point) {
+  if (lm.kind == LandmarkKind::kCartesian) {
+    J->L[i] = R;
+    J->A_pos[i] = A_pos_point;
+    J->A_rot[i] = A_rot_point;
+    return;
+  }
+  const Mat3 dl_dy_new = lm.paramsFromPointJacobian() * R.transpose();
+  J->L[i].setIdentity();
+  J->A_pos[i] = dl_dy_new * A_pos_point;
+  J->A_rot[i] = dl_dy_new * A_rot_point;
+}
+
+void resizeLandmarkRows(FrameChangeJacobian* J, int N) {
+  J->L.resize(static_cast<size_t>(N));
+  J->A_pos.resize(static_cast<size_t>(N));
+  J->A_rot.resize(static_cast<size_t>(N));
 }
 
 /// Error-state Jacobian blocks shared by world->sensor and the composition: a new strapdown
@@ -33,14 +56,21 @@ Eigen::MatrixXd multiplyByTransposeOnRight(const Eigen::MatrixXd& M, const Frame
 ///   v'  = R^T v          -> dv'  = R^T dv + R^T [v]x dpsi
 ///   Y'  = R^T (Y - p)    -> dY'  = R^T dY - R^T dp + R^T [Y - p]x dpsi
 void resetToBodyLandmarks(const FilterState& s, const Mat3& R, FrameChangeJacobian* J) {
-  J->R_l = R.transpose();
   J->pos_col = idx::kP;
-  J->A_pos = -R.transpose();
   J->rot_col = idx::kPsi;
-  J->A_rot.resize(static_cast<size_t>(s.numLandmarks()));
+  resizeLandmarkRows(J, s.numLandmarks());
   for (int i = 0; i < s.numLandmarks(); ++i) {
-    J->A_rot[static_cast<size_t>(i)] = R.transpose() * skew(s.landmark(i) - s.x.p_s_b);
+    setLandmarkRows(J, static_cast<size_t>(i), s.landmark(i), R.transpose(), -R.transpose(),
+                    R.transpose() * skew(s.landmarkPosition(i) - s.x.p_s_b));
   }
+}
+
+/// The landmarks moved to the new frame: y' = R y + t.
+std::vector<Landmark> transformLandmarks(const FilterState& s, const Mat3& R, const Vec3& t) {
+  std::vector<Landmark> out;
+  out.reserve(s.landmarks().size());
+  for (const auto& lm : s.landmarks()) out.push_back(lm.transformed(R, t));
+  return out;
 }
 
 void checkFinite(const Eigen::MatrixXd& P) {
@@ -63,9 +93,10 @@ Eigen::MatrixXd denseJacobian(const FrameChangeJacobian& J, int N) {
   Eigen::MatrixXd D = Eigen::MatrixXd::Zero(m_out + 3 * N, m_in + 3 * N);
   D.topLeftCorner(m_out, m_in) = J.J_motion;
   for (int i = 0; i < N; ++i) {
-    D.block<3, 3>(m_out + 3 * i, m_in + 3 * i) = J.R_l;
-    D.block<3, 3>(m_out + 3 * i, J.pos_col) += J.A_pos;
-    D.block<3, 3>(m_out + 3 * i, J.rot_col) += J.A_rot[static_cast<size_t>(i)];
+    const size_t k = static_cast<size_t>(i);
+    D.block<3, 3>(m_out + 3 * i, m_in + 3 * i) = J.L[k];
+    D.block<3, 3>(m_out + 3 * i, J.pos_col) += J.A_pos[k];
+    D.block<3, 3>(m_out + 3 * i, J.rot_col) += J.A_rot[k];
   }
   return D;
 }
@@ -103,8 +134,7 @@ void compose(FilterState& s) {
   x.v_s_b = Rt * s.x.v_s_b;
   x.p_s_b.setZero();
   x.q_s_b.setIdentity();
-  std::vector<Vec3> lms(s.landmarks().size());
-  for (int i = 0; i < s.numLandmarks(); ++i) lms[static_cast<size_t>(i)] = Rt * (s.landmark(i) - s.x.p_s_b);
+  std::vector<Landmark> lms = transformLandmarks(s, Rt, -Rt * s.x.p_s_b);
   s.reset(s.mechanization(), x, s.landmarkIds(), std::move(lms), std::move(Pn));
 }
 
@@ -150,13 +180,12 @@ FrameChangeJacobian sensorToWorldJacobian(const FilterState& s) {
   FrameChangeJacobian J;
   J.J_motion = sensorToWorldMotionJacobian(s.x);
   // Y_n = p_n_s + R_n_s Y_s
-  J.R_l = R_n_s;
   J.pos_col = kPns;
-  J.A_pos.setIdentity();
   J.rot_col = kPsiNs;
-  J.A_rot.resize(static_cast<size_t>(s.numLandmarks()));
+  resizeLandmarkRows(&J, s.numLandmarks());
   for (int i = 0; i < s.numLandmarks(); ++i) {
-    J.A_rot[static_cast<size_t>(i)] = -skew(R_n_s * s.landmark(i));
+    setLandmarkRows(&J, static_cast<size_t>(i), s.landmark(i), R_n_s, Mat3::Identity(),
+                    -skew(R_n_s * s.landmarkPosition(i)));
   }
   return J;
 }
@@ -169,7 +198,7 @@ void switchMechanization(FilterState& s, Mechanization target) {
     return;
   }
   MotionState x;
-  std::vector<Vec3> lms(s.landmarks().size());
+  std::vector<Landmark> lms;
   FrameChangeJacobian J;
   if (!from_sc) {  // world -> sensor: {s} := current body frame
     J = worldToSensorJacobian(s);
@@ -177,15 +206,13 @@ void switchMechanization(FilterState& s, Mechanization target) {
     x.p_n_s = s.x.p_s_b;
     x.q_n_s = s.x.q_s_b;
     x.v_s_b = Rt * s.x.v_s_b;
-    for (int i = 0; i < s.numLandmarks(); ++i) lms[static_cast<size_t>(i)] = Rt * (s.landmark(i) - s.x.p_s_b);
+    lms = transformLandmarks(s, Rt, -Rt * s.x.p_s_b);
   } else {  // sensor -> world
     J = sensorToWorldJacobian(s);
     x.p_s_b = s.x.p_n_s + s.x.q_n_s * s.x.p_s_b;
     x.q_s_b = (s.x.q_n_s * s.x.q_s_b).normalized();
     x.v_s_b = s.x.q_n_s * s.x.v_s_b;
-    for (int i = 0; i < s.numLandmarks(); ++i) {
-      lms[static_cast<size_t>(i)] = s.x.p_n_s + s.x.q_n_s * s.landmark(i);
-    }
+    lms = transformLandmarks(s, s.x.q_n_s.toRotationMatrix(), s.x.p_n_s);
   }
   x.b_a = s.x.b_a;
   x.b_g = s.x.b_g;

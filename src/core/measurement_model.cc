@@ -7,19 +7,33 @@ Vec3 landmarkInCamera(const MotionState& x, const Vec3& p_s_l, const CameraExtri
   return T_b_c.R_b_c.transpose() * (p_b_l - T_b_c.p_b_c);
 }
 
-bool predictObservation(const MotionState& x, const Vec3& p_s_l, const CameraModel& camera,
-                        const CameraExtrinsics& T_b_c, Eigen::Vector2d* uv,
-                        ObservationJacobians* J) {
-  const Vec3 p_c_l = landmarkInCamera(x, p_s_l, T_b_c);
+bool predictObservation(const MotionState& x, const Landmark& lm, const CameraModel& camera,
+                        const CameraExtrinsics& T_b_c, Eigen::Vector2d* uv, ObservationJacobians* J) {
+  const Mat3 R_s_b = x.q_s_b.toRotationMatrix();
+  const Vec3 p_s_c = x.p_s_b + R_s_b * T_b_c.p_b_c;
+  const Mat3 R_c_s = T_b_c.R_b_c.transpose() * R_s_b.transpose();
+  // q_s = w * (p_s_l - p_s_c) with w = 1 (Cartesian) or rho (inverse depth); pi(q_c) = pi(p_c).
+  Vec3 q_s;
+  double w = 1.0;
+  Mat3 dq_dl;
+  if (lm.kind == LandmarkKind::kCartesian) {
+    q_s = lm.l - p_s_c;
+    dq_dl.setIdentity();
+  } else {
+    w = lm.l.z();
+    q_s = w * (lm.p_s_a - p_s_c) + lm.R_s_a * Vec3(lm.l.x(), lm.l.y(), 1.0);
+    dq_dl << lm.R_s_a.col(0), lm.R_s_a.col(1), lm.p_s_a - p_s_c;
+  }
+  const Vec3 q_c = R_c_s * q_s;
   Eigen::Matrix<double, 2, 3> J_pi;
-  if (!camera.project(p_c_l, uv, J ? &J_pi : nullptr)) return false;
+  if (!camera.project(q_c, uv, J ? &J_pi : nullptr)) return false;
   if (J) {
-    // p_c = R_b_c^T (R_s_b^T (Y - p) - p_b_c); with R_true = Exp(psi) R:
-    // d p_c = R_c_s (dY - dp) + R_c_s [Y - p]x psi.
-    const Mat3 R_c_s = T_b_c.R_b_c.transpose() * x.q_s_b.conjugate().toRotationMatrix();
-    J->H_l = J_pi * R_c_s;                 // J_Y
-    J->H_p = -J->H_l;                      // J_p
-    J->H_psi = J->H_l * skew(p_s_l - x.p_s_b);  // J_psi
+    // With R_true = Exp(psi) R: d q_c = R_c_s (dq_dl dl - w dp + [q_s + w R_s_b p_b_c]x psi),
+    // since q_s + w R_s_b p_b_c = w (p_s_l - p_s_b).
+    const Eigen::Matrix<double, 2, 3> JR = J_pi * R_c_s;
+    J->H_l = JR * dq_dl;                                     // J_Y
+    J->H_p = -w * JR;                                        // J_p
+    J->H_psi = JR * skew(q_s + w * (R_s_b * T_b_c.p_b_c));  // J_psi
   }
   return true;
 }

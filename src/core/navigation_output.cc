@@ -40,23 +40,25 @@ std::vector<NavLandmark> navLandmarks(const FilterState& s) {
   std::vector<NavLandmark> out(static_cast<size_t>(s.numLandmarks()));
   const Eigen::MatrixXd& P = s.covariance();
   const bool sc = isSensorCentric(s.mechanization());
-  FrameChangeJacobian J;
-  if (sc) J = sensorToWorldJacobian(s);
+  const Mat3 R_n_s = s.x.q_n_s.toRotationMatrix();
   for (int i = 0; i < s.numLandmarks(); ++i) {
     auto& o = out[static_cast<size_t>(i)];
     o.id = s.landmarkIds()[static_cast<size_t>(i)];
     const int li = s.landmarkIndex(i);
+    Mat3 M;  // d(point in {s}) / d(landmark entries)
+    const Vec3 p_s_l = s.landmark(i).position(&M);
     if (!sc) {
-      o.p_n_l = s.landmark(i);
-      o.cov = P.block<3, 3>(li, li);
-      continue;
+      o.p_n_l = p_s_l;
+      o.cov = M * P.block<3, 3>(li, li) * M.transpose();
+    } else {
+      // Y_n = p_n_s + R_n_s Y_s -> dY_n = R_n_s M dl + dp_n_s - [R_n_s Y_s]x psi_n_s
+      const Vec3 r = R_n_s * p_s_l;
+      o.p_n_l = s.x.p_n_s + r;
+      Eigen::Matrix<double, 3, 9> G;
+      G << R_n_s * M, Mat3::Identity(), -skew(r);
+      const int blocks[3] = {li, idx::kPns, idx::kPsiNs};
+      o.cov = G * gatherBlocks<3>(P, blocks) * G.transpose();
     }
-    // The landmark rows of the sensor -> world frame change: Y_n = p_n_s + R_n_s Y_s.
-    o.p_n_l = s.x.p_n_s + s.x.q_n_s * s.landmark(i);
-    Eigen::Matrix<double, 3, 9> G;
-    G << J.R_l, J.A_pos, J.A_rot[static_cast<size_t>(i)];
-    const int blocks[3] = {li, J.pos_col, J.rot_col};
-    o.cov = G * gatherBlocks<3>(P, blocks) * G.transpose();
     o.cov = (0.5 * (o.cov + o.cov.transpose())).eval();
   }
   return out;

@@ -45,7 +45,6 @@ Scenario circleScenario(double duration_s, bool noise, std::uint64_t world_seed)
   sc.imu.noise = paperImuNoise();
   sc.imu.noise_enabled = noise;
   sc.cam.pixel_noise_px = noise ? 1.0 : 0.0;
-  sc.cam.max_features = 40;
   return sc;
 }
 
@@ -64,6 +63,47 @@ Scenario wallScenario(double duration_s, bool noise, std::uint64_t world_seed) {
   sc.imu.noise = paperImuNoise();
   sc.imu.noise_enabled = noise;
   sc.cam.pixel_noise_px = noise ? 1.0 : 0.0;
+  return sc;
+}
+
+Scenario hallwayScenario(const HallwayParams& params, double density_per_m2, std::uint64_t world_seed) {
+  Scenario sc;
+  sc.trajectory = pedestrianWalk(params);
+  std::mt19937_64 rng(world_seed);
+  sc.world = landmarksOnQuads(hallwayGeometry(params), density_per_m2, rng);
+  sc.camera = paperCamera();
+  sc.T_b_c = torsoCameraExtrinsics();
+  sc.imu.noise = paperImuNoise();
+  return sc;
+}
+
+CameraExtrinsics forwardLookingExtrinsics(const Trajectory& traj) {
+  Vec3 fwd = Vec3::Zero(), down = Vec3::Zero();
+  for (double t = traj.startTime(); t <= traj.endTime(); t += 0.1) {
+    const TrajectorySample s = traj.sample(t);
+    if (s.v_n_b.norm() > 0.2) fwd += s.q_n_b.conjugate() * s.v_n_b.normalized();
+    down += s.q_n_b.conjugate() * Vec3::UnitZ();
+  }
+  if (fwd.norm() < 1e-6) fwd = Vec3::UnitX();
+  fwd.normalize();
+  Vec3 y = down - down.dot(fwd) * fwd;
+  if (y.norm() < 1e-6) y = fwd.unitOrthogonal();
+  y.normalize();
+  CameraExtrinsics T;
+  T.R_b_c.col(2) = fwd;  // camera z: forward
+  T.R_b_c.col(1) = y;    // camera y: image down
+  T.R_b_c.col(0) = y.cross(fwd);
+  return T;
+}
+
+Scenario tumScenario(const std::string& path, double per_metre, std::uint64_t world_seed) {
+  Scenario sc;
+  sc.trajectory = loadTumTrajectory(path);
+  std::mt19937_64 rng(world_seed);
+  sc.world = landmarksAroundTrajectory(*sc.trajectory, per_metre, 1.0, 10.0, rng);
+  sc.camera = paperCamera();
+  sc.T_b_c = forwardLookingExtrinsics(*sc.trajectory);
+  sc.imu.noise = paperImuNoise();
   return sc;
 }
 

@@ -1,5 +1,6 @@
 #include "vi_ekf_slam/sim/sim_runner.h"
 
+#include <chrono>
 #include <cmath>
 
 namespace vi_ekf_slam::sim {
@@ -19,6 +20,7 @@ SimRun runSimulation(const Scenario& sc, const EkfSlamConfig& config, const NavS
   const Trajectory& traj = *sc.trajectory;
   const ImuSequence imu = simulateImu(traj, sc.imu, rng);
   EkfSlam filter(config, sc.camera, sc.T_b_c);
+  TrackingCamera camera(sc.world, sc.camera, sc.T_b_c, sc.cam);
   filter.initialize(initial);
   SimRun run;
   const double cam_dt = 1.0 / sc.cam.rate_hz;
@@ -35,8 +37,10 @@ SimRun runSimulation(const Scenario& sc, const EkfSlamConfig& config, const NavS
       const size_t bias_index = std::min(k, imu.true_accel_bias.size() - 1);
       rec.true_accel_bias = imu.true_accel_bias[bias_index];
       rec.true_gyro_bias = imu.true_gyro_bias[bias_index];
-      CameraFrame frame = observe(rec.truth, sc.world, sc.camera, sc.T_b_c, sc.cam, &rng);
+      CameraFrame frame = camera.observe(rec.truth, &rng);
+      const auto tic = std::chrono::steady_clock::now();
       rec.result = filter.processFrame(frame);
+      rec.filter_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - tic).count();
       rec.estimate = filter.navState();
       rec.landmarks_in_state = filter.state().numLandmarks();
       if (callback) callback(filter, rec);

@@ -45,10 +45,10 @@ TEST(FilterState, BoxplusBoxminusRoundTrip) {
 TEST(FilterState, AppendLandmarkKeepsSymmetryAndRejectsDuplicates) {
   std::mt19937_64 rng(25);
   FilterState s = test::randomState(Mechanization::kWorldCentric, 1, rng);
-  EXPECT_THROW(s.appendLandmark(100, Vec3::Zero(), Mat3::Identity(), Eigen::MatrixXd::Zero(3, s.dim())),
+  EXPECT_THROW(s.appendLandmark(100, Landmark::cartesian(Vec3::Zero()), Mat3::Identity(), Eigen::MatrixXd::Zero(3, s.dim())),
                std::invalid_argument);
   const Eigen::MatrixXd cross = Eigen::MatrixXd::Random(3, s.dim()) * 1e-3;
-  s.appendLandmark(7, Vec3(1, 2, 3), Mat3::Identity(), cross);
+  s.appendLandmark(7, Landmark::cartesian(Vec3(1, 2, 3)), Mat3::Identity(), cross);
   const Eigen::MatrixXd& P = s.covariance();
   EXPECT_EQ(test::maxAbs(P - P.transpose()), 0.0);
   EXPECT_EQ(test::maxAbs(P.block(s.dim() - 3, 0, 3, s.dim() - 3) - cross), 0.0);

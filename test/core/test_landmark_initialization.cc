@@ -56,7 +56,7 @@ TEST_P(LandmarkInitTest, CovarianceIsFirstOrderPropagation) {
   const Eigen::Matrix3d Pll = Gx * P0 * Gx.transpose() + l.G_uv * l.G_uv.transpose() +
                               16.0 * l.G_depth * l.G_depth.transpose();
   EXPECT_LT(test::maxAbs(P.block<3, 3>(n, n) - Pll), 1e-12);
-  EXPECT_LT((s.landmark(3) - l.p_s_l).norm(), 1e-12);
+  EXPECT_LT((s.landmark(3).l - l.p_s_l).norm(), 1e-12);
 }
 
 INSTANTIATE_TEST_SUITE_P(Mechanizations, LandmarkInitTest,
@@ -74,5 +74,67 @@ TEST(LandmarkInit, LargeVarianceAlongTheRayPixelNoiseAcross) {
   // Across: (depth * pixel / focal)^2 = (8 / 420)^2 for both axes.
   EXPECT_NEAR(P(1, 1), std::pow(8.0 / 420.0, 2), 1e-9);
   EXPECT_NEAR(P(2, 2), std::pow(8.0 / 420.0, 2), 1e-9);
-  EXPECT_NEAR(s.landmark(0).x(), 8.0 + T.p_b_c.x(), 1e-9);
+  EXPECT_NEAR(s.landmark(0).l.x(), 8.0 + T.p_b_c.x(), 1e-9);
+}
+
+TEST(LandmarkInit, InverseDepthIsTheSameRayAndItsCovarianceIsFirstOrder) {
+  std::mt19937_64 rng(29);
+  const CameraModel cam = test::paperCamera();
+  const CameraExtrinsics T = test::forwardCamera();
+  FilterState s = test::randomState(Mechanization::kSensorCentric, 2, rng);
+  const FilterState s0 = s;
+  const Eigen::MatrixXd P0 = s.covariance();
+  InverseDepthParams p;
+  const Eigen::Vector2d uv(220.0, 330.0);
+  ASSERT_TRUE(initializeLandmarkInverseDepth(s, {7, uv}, cam, T, p));
+  const Landmark& lm = s.landmark(2);
+  ASSERT_EQ(lm.kind, LandmarkKind::kInverseDepth);
+  EXPECT_NEAR(lm.l.z(), 1.0 / p.initial_depth_m, 1e-12);
+  // The landmark re-projects onto its own pixel from the pose it was created at.
+  Eigen::Vector2d uv_pred;
+  ASSERT_TRUE(predictObservation(s.x, lm, cam, T, &uv_pred));
+  EXPECT_LT((uv_pred - uv).norm(), 1e-9);
+  // Numerical Jacobian of l = (u, v, rho) w.r.t. state error, pixel and rho, with the anchor
+  // kept at the estimated camera pose (it is a constant of the parameterization).
+  const int n = s0.dim();
+  const Vec3 a = lm.p_s_a;
+  const Mat3 Ra = lm.R_s_a;
+  const Eigen::MatrixXd Jn = test::numericJacobian(
+      [&](const Eigen::VectorXd& d) -> Eigen::VectorXd {
+        FilterState t = s0;
+        t.boxplus(d.head(n));
+        InitializedLandmark l;
+        backProject(t.x, uv + d.segment<2>(n), 1.0 / (1.0 / p.initial_depth_m + d(n + 2)), cam, T, &l);
+        const Vec3 p_a = Ra.transpose() * (l.p_s_l - a);
+        return Vec3(p_a.x() / p_a.z(), p_a.y() / p_a.z(), 1.0 / p_a.z());
+      },
+      n + 3);
+  const Eigen::MatrixXd Jx = Jn.leftCols(n);
+  const Eigen::MatrixXd Jz = Jn.rightCols(3);
+  const Eigen::MatrixXd& P = s.covariance();
+  EXPECT_LT(test::maxAbs(P.block(n, 0, 3, n) - Jx * P0), 1e-8);
+  Eigen::Matrix3d R = Eigen::Matrix3d::Zero();
+  R(0, 0) = R(1, 1) = 1.0;
+  R(2, 2) = p.inverse_depth_sigma * p.inverse_depth_sigma;
+  const Eigen::Matrix3d expected = Jx * P0 * Jx.transpose() + Jz * R * Jz.transpose();
+  EXPECT_LT(test::maxAbs(P.block<3, 3>(n, n) - expected), 1e-8);
+}
+
+TEST(Landmark, InverseDepthJacobiansAreInversesAndMatchNumeric) {
+  Landmark lm;
+  lm.kind = LandmarkKind::kInverseDepth;
+  lm.p_s_a = Vec3(1, 2, 3);
+  lm.R_s_a = expSO3(Vec3(0.3, -0.4, 1.0));
+  lm.l = Vec3(0.2, -0.1, 0.25);
+  Mat3 M;
+  lm.position(&M);
+  EXPECT_LT(test::maxAbs(lm.paramsFromPointJacobian() * M - Mat3::Identity()), 1e-12);
+  const Eigen::MatrixXd Mn = test::numericJacobian(
+      [&](const Eigen::VectorXd& d) -> Eigen::VectorXd {
+        Landmark t = lm;
+        t.l += Vec3(d);
+        return t.position();
+      },
+      3);
+  EXPECT_LT(test::maxAbs(Mn - M), 1e-7);
 }

@@ -50,7 +50,26 @@ TEST(MeasurementModel, PredictsTheSimulatedPixel) {
   const Vec3 p_c(0, 0, 5);
   const Vec3 p_s = x.q_s_b * (T.R_b_c * p_c + T.p_b_c) + x.p_s_b;
   Eigen::Vector2d uv;
-  ASSERT_TRUE(predictObservation(x, p_s, cam, T, &uv));
+  ASSERT_TRUE(predictObservation(x, Landmark::cartesian(p_s), cam, T, &uv));
   EXPECT_LT((uv - Eigen::Vector2d(349.0, 269.5)).norm(), 1e-9);
   EXPECT_LT((landmarkInCamera(x, p_s, T) - p_c).norm(), 1e-12);
+}
+
+TEST(MeasurementModel, InverseDepthPointAtInfinityStaysFinite) {
+  // rho = 0: a point at infinity along the anchor ray projects like a direction.
+  const CameraModel cam = test::paperCamera();
+  const CameraExtrinsics T = test::forwardCamera();
+  MotionState x;
+  Landmark lm;
+  lm.kind = LandmarkKind::kInverseDepth;
+  lm.R_s_a = T.R_b_c;
+  lm.p_s_a = T.p_b_c;
+  lm.l = Vec3(0.1, -0.05, 0.0);
+  x.p_s_b = Vec3(0.5, 0.3, -0.2);  // translation does not move a point at infinity
+  Eigen::Vector2d uv;
+  ObservationJacobians J;
+  ASSERT_TRUE(predictObservation(x, lm, cam, T, &uv, &J));
+  EXPECT_LT((uv - cam.normalizedToPixel(Eigen::Vector2d(0.1, -0.05))).norm(), 1e-9);
+  EXPECT_TRUE(J.H_p.allFinite() && J.H_psi.allFinite() && J.H_l.allFinite());
+  EXPECT_LT(J.H_p.norm(), 1e-12);
 }

@@ -1,6 +1,7 @@
 // Every setting of the estimator, with units in the names or comments, and its validation.
 #pragma once
 
+#include <optional>
 #include <string>
 
 #include "vi_ekf_slam/core/ekf_update.h"
@@ -20,8 +21,10 @@ std::string toString(CompositionTrigger t);
 
 /// How a new landmark enters the state.
 enum class LandmarkInitMethod {
-  kFixedDepth,  ///< paper: fixed depth along the first ray, large variance along it
+  kFixedDepth,    ///< paper: Cartesian point at a fixed depth along the first ray
+  kInverseDepth,  ///< anchored inverse depth with a wide prior on rho (beyond the paper)
 };
+std::optional<LandmarkInitMethod> landmarkInitFromString(const std::string& s);
 std::string toString(LandmarkInitMethod m);
 
 /// Initial standard deviations. World-centric: they describe the registration error of the
@@ -36,16 +39,21 @@ struct InitialUncertainty {
   double gyro_bias_radps = 0.002;
 };
 
+/// Defaults are the most consistent configuration of the study (README): sensor-centric with
+/// the composition after every update and anchored inverse-depth landmarks. The paper's setup is
+/// composition_trigger = kNewLandmarks and landmark_init = kFixedDepth.
 struct EkfSlamConfig {
   Mechanization mechanization = Mechanization::kSensorCentricComposition;
-  CompositionTrigger composition_trigger = CompositionTrigger::kNewLandmarks;
+  CompositionTrigger composition_trigger = CompositionTrigger::kEveryUpdate;
   int composition_new_landmarks = 4;  ///< compose when MORE than this many are new (paper: 4)
   ImuNoiseParams imu_noise;
   double gravity_mps2 = 9.81;         ///< local gravity magnitude [m/s^2]
   UpdateParams update;                ///< pixel noise [px] and chi^2 gate probability
-  LandmarkInitMethod landmark_init = LandmarkInitMethod::kFixedDepth;
+  LandmarkInitMethod landmark_init = LandmarkInitMethod::kInverseDepth;
   double landmark_depth_m = 8.0;        ///< fixed depth of new landmarks [m]
   double landmark_depth_sigma_m = 4.0;  ///< std-dev along the ray [m]
+  double inverse_depth_initial_m = 5.0; ///< inverse depth: prior depth 1/rho0 [m]
+  double inverse_depth_sigma = 0.3;     ///< inverse depth: prior std-dev of rho [1/m]
   int max_landmarks = 300;              ///< map size bound
   double landmark_timeout_s = 2.0;      ///< drop landmarks not observed for this long [s]; <0: never
   double max_imu_gap_s = 0.1;           ///< IMU intervals longer than this are reported [s]

@@ -9,6 +9,7 @@
 #include <unordered_map>
 #include <vector>
 
+#include "vi_ekf_slam/core/landmark.h"
 #include "vi_ekf_slam/core/so3.h"
 #include "vi_ekf_slam/core/state_layout.h"
 
@@ -49,14 +50,16 @@ class FilterState {
 
   // --- map ---------------------------------------------------------------------------------
   const std::vector<std::int64_t>& landmarkIds() const { return landmark_ids_; }
-  const Vec3& landmark(int i) const { return landmarks_[static_cast<size_t>(i)]; }
-  Vec3& landmark(int i) { return landmarks_[static_cast<size_t>(i)]; }
-  const std::vector<Vec3>& landmarks() const { return landmarks_; }
+  const Landmark& landmark(int i) const { return landmarks_[static_cast<size_t>(i)]; }
+  Landmark& landmark(int i) { return landmarks_[static_cast<size_t>(i)]; }
+  const std::vector<Landmark>& landmarks() const { return landmarks_; }
+  /// Cartesian position in {s} of landmark i.
+  Vec3 landmarkPosition(int i) const { return landmark(i).position(); }
   std::optional<int> findLandmark(std::int64_t id) const;
 
-  /// Appends a landmark at p_s_l with its 3x3 covariance and its cross-covariance to the
-  /// existing state (3 x dim(), in the current ordering).
-  void appendLandmark(std::int64_t id, const Vec3& p_s_l, const Eigen::Matrix3d& P_ll,
+  /// Appends a landmark with its 3x3 covariance and its cross-covariance to the existing state
+  /// (3 x dim(), in the current ordering).
+  void appendLandmark(std::int64_t id, const Landmark& landmark, const Eigen::Matrix3d& P_ll,
                       const Eigen::MatrixXd& P_l_state);
   /// Deletes landmarks (by map position) with their rows and columns of P.
   void removeLandmarks(std::vector<int> indices);
@@ -86,7 +89,7 @@ class FilterState {
 
   /// Replaces nominal state, map and covariance at once (used by the frame changes).
   void reset(Mechanization m, const MotionState& x, std::vector<std::int64_t> ids,
-             std::vector<Vec3> landmarks, Eigen::MatrixXd P);
+             std::vector<Landmark> landmarks, Eigen::MatrixXd P);
 
  private:
   void flush() const;
@@ -94,7 +97,7 @@ class FilterState {
 
   Mechanization mechanization_;
   std::vector<std::int64_t> landmark_ids_;
-  std::vector<Vec3> landmarks_;
+  std::vector<Landmark> landmarks_;
   std::unordered_map<std::int64_t, int> index_of_id_;
   mutable Eigen::MatrixXd P_;
   mutable MotionMatrix pending_phi_;

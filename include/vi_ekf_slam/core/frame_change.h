@@ -2,9 +2,10 @@
 // the switch between world-centric and sensor-centric mechanizations, and the navigation-frame
 // view of a sensor-centric state. All three are maps whose Jacobian J has the structure
 //
-//          [ J_motion      0    ]      motion rows: a small dense block (15 or 21 square/rect.)
-//     J =  [ A_1        R_l     ]      landmark i:  one rotation R_l shared by all landmarks,
-//          [ A_2             R_l]      plus A_i acting on one position and one rotation block
+//          [ J_motion        0        ]   motion rows: a small dense block (15 or 21, square/rect.)
+//     J =  [ A_1        L_1            ]   landmark i: a 3x3 block L_i on its own entries (a
+//          [ A_2               L_2     ]   rotation for Cartesian points, I for inverse depth)
+//                                          plus A_i acting on one position and one rotation block
 //
 // so P' = J P J^T is computed in O(n^2) with block operations, never as a dense n^3 product.
 #pragma once
@@ -17,10 +18,10 @@ namespace vi_ekf_slam {
 
 struct FrameChangeJacobian {
   Eigen::MatrixXd J_motion;  ///< motion_out x motion_in
-  Mat3 R_l;                  ///< d(landmark_out)/d(landmark_in), same for every landmark
-  int pos_col = 0;           ///< motion column block that A_pos acts on
-  Mat3 A_pos;                ///< d(landmark_out)/d(motion[pos_col..+3])
+  int pos_col = 0;           ///< motion column block that A_pos[i] acts on
   int rot_col = 0;           ///< motion column block that A_rot[i] acts on
+  std::vector<Mat3> L;       ///< d(landmark_out_i)/d(landmark_in_i)
+  std::vector<Mat3> A_pos;   ///< d(landmark_out_i)/d(motion[pos_col..+3])
   std::vector<Mat3> A_rot;   ///< d(landmark_out_i)/d(motion[rot_col..+3])
 };
 

@@ -1,7 +1,13 @@
-// Landmark initialization as in the paper (Sec. IV-A): a new landmark is put at a fixed depth
-// along the ray of its first observation, with a large variance along the ray and the pixel
-// noise across it, and with its full cross-covariance to the state through the initialization
-// Jacobians (first-order propagation of pose, pixel and depth uncertainty).
+// Landmark initialization.
+// Fixed depth (the paper, Sec. IV-A): a new Cartesian landmark at a fixed depth along the ray of
+//   its first observation, with a large variance along the ray and the pixel noise across it,
+//   and its full cross-covariance to the state through the initialization Jacobians
+//   (first-order propagation of pose, pixel and depth uncertainty).
+// Inverse depth (beyond the paper, after Civera, Davison, Montiel 2008): the same ray as an
+//   anchored inverse-depth landmark (landmark.h) whose inverse depth rho has a Gaussian prior
+//   wide enough to cover every depth from about a metre to infinity. The measurement model is
+//   close to linear in rho, so the depth is learned without the linearization errors that make
+//   the fixed-depth filter inconsistent.
 #pragma once
 
 #include "vi_ekf_slam/core/measurement_model.h"
@@ -36,5 +42,17 @@ void appendInitializedLandmark(FilterState& state, std::int64_t id, const Initia
 bool initializeLandmarkFixedDepth(FilterState& state, const FeatureObservation& obs,
                                   const CameraModel& camera, const CameraExtrinsics& T_b_c,
                                   const FixedDepthParams& params);
+
+struct InverseDepthParams {
+  double initial_depth_m = 5.0;       ///< prior mean of the depth, 1 / rho0 [m]
+  double inverse_depth_sigma = 0.3;   ///< prior std-dev of rho [1/m]
+  double pixel_noise_px = 1.0;        ///< std-dev of the observed pixel [px]
+};
+
+/// Anchored inverse depth; the anchor is the estimated camera frame. False if the pixel cannot
+/// be undistorted.
+bool initializeLandmarkInverseDepth(FilterState& state, const FeatureObservation& obs,
+                                    const CameraModel& camera, const CameraExtrinsics& T_b_c,
+                                    const InverseDepthParams& params);
 
 }  // namespace vi_ekf_slam

@@ -7,6 +7,7 @@
 
 #include "vi_ekf_slam/core/camera_model.h"
 #include "vi_ekf_slam/core/filter_state.h"
+#include "vi_ekf_slam/core/landmark.h"
 
 namespace vi_ekf_slam {
 
@@ -20,14 +21,15 @@ struct CameraExtrinsics {
 struct ObservationJacobians {
   Eigen::Matrix<double, 2, 3> H_p;    ///< w.r.t. position error of {b} in {s}
   Eigen::Matrix<double, 2, 3> H_psi;  ///< w.r.t. orientation error psi_s_b
-  Eigen::Matrix<double, 2, 3> H_l;    ///< w.r.t. landmark position error
+  Eigen::Matrix<double, 2, 3> H_l;    ///< w.r.t. the landmark's three state entries
 };
 
-/// Landmark p_s_l in the camera frame.
+/// A Cartesian point p_s_l in the camera frame.
 Vec3 landmarkInCamera(const MotionState& x, const Vec3& p_s_l, const CameraExtrinsics& T_b_c);
 
-/// Predicts the pixel of landmark p_s_l; false if it is behind the camera.
-bool predictObservation(const MotionState& x, const Vec3& p_s_l, const CameraModel& camera,
+/// Predicts the pixel of a landmark; false if it is behind the camera. Inverse-depth landmarks
+/// are projected through rho * (p_s_l - p_s_c), which stays finite as rho -> 0.
+bool predictObservation(const MotionState& x, const Landmark& landmark, const CameraModel& camera,
                         const CameraExtrinsics& T_b_c, Eigen::Vector2d* uv,
                         ObservationJacobians* J = nullptr);
 

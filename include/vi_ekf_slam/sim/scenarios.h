@@ -3,6 +3,7 @@
 
 #include <cstdint>
 
+#include "vi_ekf_slam/sim/hallway.h"
 #include "vi_ekf_slam/sim/sim_runner.h"
 
 namespace vi_ekf_slam::sim {
@@ -25,5 +26,18 @@ Scenario circleScenario(double duration_s, bool noise, std::uint64_t world_seed)
 /// A few landmarks (25) on and near a wall 5-8 m ahead, always in view, watched by a rig that
 /// moves a few decimetres on every axis: the setting in which a noise-free filter must converge.
 Scenario wallScenario(double duration_s, bool noise, std::uint64_t world_seed);
+
+/// The paper's simulation: the built-in hallway walk with landmarks on walls, floor and ceiling
+/// (`density_per_m2`), the paper's camera at 28 Hz and IMU at 200 Hz.
+Scenario hallwayScenario(const HallwayParams& params, double density_per_m2, std::uint64_t world_seed);
+
+/// A TUM pose file driven as a C2 motion, with landmarks scattered 1-10 m around the path
+/// (`per_metre` of path) and a camera looking along the mean direction of travel in the body
+/// frame (the files use different body conventions).
+Scenario tumScenario(const std::string& path, double per_metre, std::uint64_t world_seed);
+
+/// Camera extrinsic looking along the mean body-frame direction of travel, image "down" along
+/// the mean body-frame gravity direction.
+CameraExtrinsics forwardLookingExtrinsics(const Trajectory& trajectory);
 
 }  // namespace vi_ekf_slam::sim

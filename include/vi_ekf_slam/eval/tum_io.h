@@ -1,0 +1,29 @@
+// TUM trajectory files: one pose a line, `t x y z qx qy qz qw` (body in world), `#` comments.
+// Estimates may append the upper triangle of the 6x6 pose covariance (21 numbers, order
+// [position, orientation]).
+#pragma once
+
+#include <Eigen/Core>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "vi_ekf_slam/core/so3.h"
+
+namespace vi_ekf_slam::eval {
+
+struct StampedPose {
+  double t = 0.0;
+  Vec3 p = Vec3::Zero();
+  Quat q = Quat::Identity();
+  std::optional<Eigen::Matrix<double, 6, 6>> cov;
+};
+
+/// Reads a TUM file. Throws std::runtime_error naming the file and line for malformed input
+/// (wrong column count, non-numbers, non-finite values, zero quaternion, non-increasing time).
+std::vector<StampedPose> readTum(const std::string& path);
+
+/// Writes poses (with the covariance columns when every pose has one).
+void writeTum(const std::string& path, const std::vector<StampedPose>& poses, const std::string& header = "");
+
+}  // namespace vi_ekf_slam::eval

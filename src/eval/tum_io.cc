@@ -1,0 +1,80 @@
+#include "vi_ekf_slam/eval/tum_io.h"
+
+#include <cmath>
+#include <fstream>
+#include <iomanip>
+#include <sstream>
+#include <stdexcept>
+
+namespace vi_ekf_slam::eval {
+
+std::vector<StampedPose> readTum(const std::string& path) {
+  std::ifstream in(path);
+  if (!in) throw std::runtime_error("cannot open trajectory file '" + path + "'");
+  std::vector<StampedPose> out;
+  std::string line;
+  int line_no = 0;
+  auto fail = [&](const std::string& why) {
+    throw std::runtime_error(path + ":" + std::to_string(line_no) + ": " + why + " (expected `t x y z qx qy qz qw`)");
+  };
+  while (std::getline(in, line)) {
+    ++line_no;
+    const auto first = line.find_first_not_of(" \t\r");
+    if (first == std::string::npos || line[first] == '#') continue;
+    std::istringstream ss(line);
+    std::vector<double> v;
+    std::string tok;
+    while (ss >> tok) {
+      try {
+        size_t used = 0;
+        v.push_back(std::stod(tok, &used));
+        if (used != tok.size()) fail("'" + tok + "' is not a number");
+      } catch (const std::logic_error&) {
+        fail("'" + tok + "' is not a number");
+      }
+    }
+    if (v.size() != 8 && v.size() != 29) fail(std::to_string(v.size()) + " columns");
+    for (double x : v) {
+      if (!std::isfinite(x)) fail("non-finite value");
+    }
+    StampedPose p;
+    p.t = v[0];
+    p.p = Vec3(v[1], v[2], v[3]);
+    p.q = Quat(v[7], v[4], v[5], v[6]);
+    if (p.q.norm() < 1e-6) fail("zero quaternion");
+    p.q.normalize();
+    if (v.size() == 29) {
+      Eigen::Matrix<double, 6, 6> c;
+      int k = 8;
+      for (int i = 0; i < 6; ++i)
+        for (int j = i; j < 6; ++j) c(i, j) = c(j, i) = v[static_cast<size_t>(k++)];
+      p.cov = c;
+    }
+    if (!out.empty() && p.t <= out.back().t) fail("time does not increase");
+    out.push_back(p);
+  }
+  return out;
+}
+
+void writeTum(const std::string& path, const std::vector<StampedPose>& poses, const std::string& header) {
+  std::ofstream out(path);
+  if (!out) throw std::runtime_error("cannot write '" + path + "'");
+  bool with_cov = !poses.empty();
+  for (const auto& p : poses) with_cov = with_cov && p.cov.has_value();
+  out << "# " << (header.empty() ? "t x y z qx qy qz qw" : header);
+  if (with_cov) out << " + upper triangle of the 6x6 [position, orientation] covariance";
+  out << "\n" << std::setprecision(9) << std::fixed;
+  for (const auto& p : poses) {
+    out << p.t << " " << p.p.x() << " " << p.p.y() << " " << p.p.z() << " " << p.q.x() << " " << p.q.y() << " "
+        << p.q.z() << " " << p.q.w();
+    if (with_cov) {
+      out << std::scientific << std::setprecision(6);
+      for (int i = 0; i < 6; ++i)
+        for (int j = i; j < 6; ++j) out << " " << (*p.cov)(i, j);
+      out << std::fixed << std::setprecision(9);
+    }
+    out << "\n";
+  }
+}
+
+}  // namespace vi_ekf_slam::eval

@@ -1,0 +1,194 @@
+#include "vi_ekf_slam/sim/monte_carlo.h"
+
+#include <algorithm>
+#include <cmath>
+#include <numeric>
+
+namespace vi_ekf_slam::sim {
+
+namespace {
+
+Vec3 sigmas(const Eigen::MatrixXd& P, int i) {
+  return P.block<3, 3>(i, i).diagonal().cwiseMax(0.0).cwiseSqrt();
+}
+
+Vec3 gaussian3(std::mt19937_64& rng, const Vec3& sigma) {
+  std::normal_distribution<double> n(0.0, 1.0);
+  const double x = n(rng), y = n(rng), z = n(rng);
+  return sigma.cwiseProduct(Vec3(x, y, z));
+}
+
+}  // namespace
+
+NavState drawInitialEstimate(const NavState& truth, const InitialUncertainty& u, std::mt19937_64& rng) {
+  NavState est = truth;
+  est.p_n_b -= gaussian3(rng, Vec3::Constant(u.position_m));
+  est.v_n_b -= gaussian3(rng, Vec3::Constant(u.velocity_mps));
+  // R_true = Exp(psi) R_est  ->  R_est = Exp(-psi) R_true
+  const Vec3 psi = gaussian3(rng, Vec3(u.roll_pitch_rad, u.roll_pitch_rad, u.yaw_rad));
+  est.q_n_b = (expQuat(-psi) * truth.q_n_b).normalized();
+  est.b_a.setZero();
+  est.b_g.setZero();
+  return est;
+}
+
+RunResult runMonteCarloRun(const Scenario& scenario_in, const EkfSlamConfig& config, std::uint64_t seed) {
+  Scenario sc = scenario_in;
+  sc.imu.initial_accel_bias_sigma_mps2 = config.initial.accel_bias_mps2;
+  sc.imu.initial_gyro_bias_sigma_radps = config.initial.gyro_bias_radps;
+  std::mt19937_64 rng(seed);
+  const double t0 = std::max(0.0, sc.trajectory->startTime());
+  const NavState truth0 = trueNavState(*sc.trajectory, t0);
+  const NavState init = drawInitialEstimate(truth0, config.initial, rng);
+
+  RunResult out;
+  // True pose of the strapdown frame {s}: the true body pose at the start and at every
+  // composition (the filter defines {s} as the true body frame at those instants).
+  Vec3 p_n_s_true = truth0.p_n_b;
+  Quat q_n_s_true = truth0.q_n_b;
+  std::vector<Vec3> p_true, p_est;
+  std::vector<double> q_err_deg;
+  const FrameCallback cb = [&](EkfSlam& f, FrameRecord& rec) {
+    FrameMetrics m;
+    m.update_ms = rec.filter_ms;
+    m.t = rec.t;
+    const NavState& n = rec.estimate;
+    const TrajectorySample& tr = rec.truth;
+    m.p_true = tr.p_n_b;
+    m.p_est = n.p_n_b;
+    m.e_p = tr.p_n_b - n.p_n_b;
+    m.e_q = eval::orientationError(tr.q_n_b, n.q_n_b);
+    m.e_v = tr.v_n_b - n.v_n_b;
+    m.e_ba = rec.true_accel_bias - n.b_a;
+    m.e_bg = rec.true_gyro_bias - n.b_g;
+    const Eigen::MatrixXd C = n.cov;
+    m.s_p = sigmas(C, idx::kP);
+    m.s_q = sigmas(C, idx::kPsi);
+    m.s_v = sigmas(C, idx::kV);
+    m.s_ba = sigmas(C, idx::kBa);
+    m.s_bg = sigmas(C, idx::kBg);
+    Eigen::Matrix<double, 6, 1> e6;
+    e6 << m.e_p, m.e_q;
+    m.nees_pose = eval::nees(e6, n.poseCovariance());
+    m.nees_p = eval::nees(m.e_p, C.block<3, 3>(idx::kP, idx::kP));
+    m.nees_q = eval::nees(m.e_q, C.block<3, 3>(idx::kPsi, idx::kPsi));
+    const FilterState& s = f.state();
+    // A composition in this frame already moved the filter's {s} to the current body frame.
+    if (rec.result.composed) {
+      p_n_s_true = tr.p_n_b;
+      q_n_s_true = tr.q_n_b;
+    }
+    if (isSensorCentric(s.mechanization())) {
+      m.has_s = true;
+      const Eigen::MatrixXd Ps = s.motionCovariance();
+      const Vec3 p_s_b_true = q_n_s_true.conjugate() * (tr.p_n_b - p_n_s_true);
+      const Quat q_s_b_true = q_n_s_true.conjugate() * tr.q_n_b;
+      m.e_p_sb = p_s_b_true - s.x.p_s_b;
+      m.e_q_sb = eval::orientationError(q_s_b_true, s.x.q_s_b);
+      m.e_p_ns = p_n_s_true - s.x.p_n_s;
+      m.e_q_ns = eval::orientationError(q_n_s_true, s.x.q_n_s);
+      m.s_p_sb = sigmas(Ps, idx::kP);
+      m.s_q_sb = sigmas(Ps, idx::kPsi);
+      m.s_p_ns = sigmas(Ps, idx::kPns);
+      m.s_q_ns = sigmas(Ps, idx::kPsiNs);
+    }
+    std::vector<Vec3> est, truth;
+    for (const auto& l : f.landmarks()) {
+      est.push_back(l.p_n_l);
+      truth.push_back(sc.world[static_cast<size_t>(l.id)].p_n);
+      out.landmark_estimates[l.id] = l.p_n_l;
+    }
+    m.gamma = eval::scaleRatio(est, truth);
+    m.landmarks = s.numLandmarks();
+    m.new_landmarks = static_cast<int>(rec.result.new_ids.size());
+    m.rejected = static_cast<int>(rec.result.update.rejected_ids.size());
+    m.composed = rec.result.composed;
+    p_true.push_back(m.p_true);
+    p_est.push_back(m.p_est);
+    q_err_deg.push_back(m.e_q.norm() * 180.0 / M_PI);
+    out.frames.push_back(m);
+  };
+  runSimulation(sc, config, init, rng, cb);
+  std::vector<Vec3> e;
+  for (size_t i = 0; i < p_true.size(); ++i) e.push_back(p_true[i] - p_est[i]);
+  out.ate_position_m = eval::rms(e);
+  out.ate_orientation_deg = eval::rms(q_err_deg);
+  out.final_position_error_m = e.empty() ? 0.0 : e.back().norm();
+  out.distance_m = eval::pathLength(p_true);
+  return out;
+}
+
+ConsistencySummary summarize(const std::string& name, const std::vector<RunResult>& runs) {
+  ConsistencySummary s;
+  s.name = name;
+  s.runs = static_cast<int>(runs.size());
+  if (runs.empty()) return s;
+  const size_t T = runs.front().frames.size();
+  for (const auto& r : runs) {
+    if (r.frames.size() != T) throw std::runtime_error("summarize: runs have different lengths");
+  }
+  const double M = static_cast<double>(runs.size());
+  s.pose_band = eval::neesBand(6, s.runs);
+  int inside = 0, counted = 0;
+  std::vector<double> times;
+  for (size_t k = 0; k < T; ++k) {
+    double np = 0, nq = 0, npose = 0, g = 0, e2 = 0;
+    int g_n = 0;
+    for (const auto& r : runs) {
+      const FrameMetrics& f = r.frames[k];
+      np += f.nees_p / M;
+      nq += f.nees_q / M;
+      npose += f.nees_pose / M;
+      e2 += f.e_p.squaredNorm() / M;
+      if (std::isfinite(f.gamma)) {
+        g += f.gamma;
+        ++g_n;
+      }
+      times.push_back(f.update_ms);
+    }
+    s.t.push_back(runs.front().frames[k].t);
+    s.avg_nees_p.push_back(np);
+    s.avg_nees_q.push_back(nq);
+    s.avg_nees_pose.push_back(npose);
+    s.avg_gamma.push_back(g_n ? g / g_n : std::nan(""));
+    s.rms_p.push_back(std::sqrt(e2));
+    if (std::isfinite(npose)) {
+      ++counted;
+      if (s.pose_band.contains(npose)) ++inside;
+    }
+  }
+  auto mean = [](const std::vector<double>& v) {
+    double acc = 0.0;
+    int n = 0;
+    for (double x : v) {
+      if (std::isfinite(x)) {
+        acc += x;
+        ++n;
+      }
+    }
+    return n ? acc / n : std::nan("");
+  };
+  s.nees_position = mean(s.avg_nees_p);
+  s.nees_orientation = mean(s.avg_nees_q);
+  s.nees_pose = mean(s.avg_nees_pose);
+  s.consistent_fraction = counted ? static_cast<double>(inside) / counted : 0.0;
+  std::vector<double> ate, ateq, fin, gam;
+  for (const auto& r : runs) {
+    ate.push_back(r.ate_position_m);
+    ateq.push_back(r.ate_orientation_deg);
+    fin.push_back(r.final_position_error_m);
+    gam.push_back(r.frames.back().gamma);
+  }
+  s.ate_position_m = mean(ate);
+  s.ate_orientation_deg = mean(ateq);
+  s.final_position_error_m = mean(fin);
+  s.distance_m = runs.front().distance_m;
+  s.final_position_error_pct = 100.0 * s.final_position_error_m / std::max(1e-9, s.distance_m);
+  s.final_scale_ratio = mean(gam);
+  s.mean_update_ms = mean(times);
+  std::sort(times.begin(), times.end());
+  s.p95_update_ms = times[static_cast<size_t>(0.95 * (times.size() - 1))];
+  return s;
+}
+
+}  // namespace vi_ekf_slam::sim

@@ -1,0 +1,285 @@
+// Monte-Carlo consistency study of the paper's Sec. IV-A: M runs of each filter configuration on
+// the built-in hallway walk or a TUM trajectory. Writes summary.json, summary.md and per
+// configuration CSV time series for tools/plot_study.py.
+//
+//   vi_ekf_slam_study --trajectory builtin|FILE --runs 50 --seed 1 --out results/study
+//                     [--configs paper|all|name,name,...] [--threads N] [--density 1.0]
+//                     [--per-metre 15] [--max-duration S]
+#include <algorithm>
+#include <atomic>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <iomanip>
+#include <iostream>
+#include <map>
+#include <mutex>
+#include <sstream>
+#include <thread>
+
+#include "vi_ekf_slam/sim/monte_carlo.h"
+#include "vi_ekf_slam/sim/scenarios.h"
+
+using namespace vi_ekf_slam;
+namespace fs = std::filesystem;
+
+namespace {
+
+struct Options {
+  std::string trajectory = "builtin";
+  int runs = 50;
+  std::uint64_t seed = 1;
+  std::string out = "results/study";
+  std::string configs = "all";
+  int threads = static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
+  double density = 1.0;    // landmarks per m^2 of wall (built-in walk)
+  double per_metre = 15.0; // landmarks per metre of path (TUM trajectories)
+  double max_duration = 0; // truncate TUM trajectories [s], 0 = whole file
+};
+
+[[noreturn]] void usage(const std::string& err) {
+  std::cerr << "error: " << err << "\n"
+            << "usage: vi_ekf_slam_study --trajectory builtin|FILE [--runs N] [--seed S] [--out DIR]\n"
+               "       [--configs paper|all|NAME,...] [--threads N] [--density PER_M2] [--per-metre N]\n"
+               "       [--max-duration S]\n";
+  std::exit(2);
+}
+
+Options parse(int argc, char** argv) {
+  Options o;
+  for (int i = 1; i < argc; ++i) {
+    const std::string k = argv[i];
+    if (i + 1 >= argc) usage("missing value for " + k);
+    const std::string v = argv[++i];
+    try {
+      if (k == "--trajectory") o.trajectory = v;
+      else if (k == "--runs") o.runs = std::stoi(v);
+      else if (k == "--seed") o.seed = std::stoull(v);
+      else if (k == "--out") o.out = v;
+      else if (k == "--configs") o.configs = v;
+      else if (k == "--threads") o.threads = std::stoi(v);
+      else if (k == "--density") o.density = std::stod(v);
+      else if (k == "--per-metre") o.per_metre = std::stod(v);
+      else if (k == "--max-duration") o.max_duration = std::stod(v);
+      else usage("unknown option " + k);
+    } catch (const std::logic_error&) {
+      usage("bad value '" + v + "' for " + k);
+    }
+  }
+  if (o.runs < 2) usage("--runs must be >= 2 (NEES bands need several runs)");
+  if (o.threads < 1) usage("--threads must be >= 1");
+  return o;
+}
+
+/// The configurations of the study. The paper's three (fixed 8 m depth, composition when more
+/// than four landmarks were added at once), then beyond the paper: the same with anchored
+/// inverse-depth landmarks, and the composition after every update (robocentric) with each
+/// landmark initialization.
+std::vector<std::pair<std::string, EkfSlamConfig>> makeConfigs(const Options& o, const sim::Scenario& sc) {
+  std::vector<std::pair<std::string, EkfSlamConfig>> all;
+  auto add = [&](Mechanization m, LandmarkInitMethod init, CompositionTrigger trig) {
+    EkfSlamConfig c;
+    c.mechanization = m;
+    c.landmark_init = init;
+    c.composition_trigger = trig;
+    c.imu_noise = sc.imu.noise;
+    c.update.pixel_noise_px = sc.cam.pixel_noise_px;
+    c.landmark_timeout_s = 1.0;  // marginalize landmarks out of view for 1 s
+    c.max_landmarks = 300;
+    std::string name = toString(m);
+    if (init == LandmarkInitMethod::kInverseDepth) name += "+inverse_depth";
+    if (m == Mechanization::kSensorCentricComposition && trig == CompositionTrigger::kEveryUpdate) {
+      name += "+every_update";
+    }
+    all.emplace_back(name, c);
+  };
+  const auto fixed = LandmarkInitMethod::kFixedDepth, inv = LandmarkInitMethod::kInverseDepth;
+  const auto paper = CompositionTrigger::kNewLandmarks, every = CompositionTrigger::kEveryUpdate;
+  for (auto m : {Mechanization::kWorldCentric, Mechanization::kSensorCentric,
+                 Mechanization::kSensorCentricComposition}) {
+    add(m, fixed, paper);
+  }
+  if (o.configs == "paper") return all;
+  for (auto m : {Mechanization::kWorldCentric, Mechanization::kSensorCentric,
+                 Mechanization::kSensorCentricComposition}) {
+    add(m, inv, paper);
+  }
+  add(Mechanization::kSensorCentricComposition, fixed, every);
+  add(Mechanization::kSensorCentricComposition, inv, every);
+  if (o.configs == "all") return all;
+  std::vector<std::pair<std::string, EkfSlamConfig>> chosen;
+  std::stringstream ss(o.configs);
+  std::string name;
+  while (std::getline(ss, name, ',')) {
+    auto it = std::find_if(all.begin(), all.end(), [&](const auto& c) { return c.first == name; });
+    if (it == all.end()) usage("unknown configuration '" + name + "'");
+    chosen.push_back(*it);
+  }
+  return chosen;
+}
+
+void writeCsvRow(std::ofstream& f, std::initializer_list<Vec3> vs) {
+  for (const Vec3& v : vs) f << "," << v.x() << "," << v.y() << "," << v.z();
+}
+
+void writeConfigFiles(const fs::path& dir, const sim::ConsistencySummary& s, const sim::RunResult& run0,
+                      const sim::Scenario& sc) {
+  fs::create_directories(dir);
+  const eval::NeesBand b3 = eval::neesBand(3, s.runs);
+  std::ofstream ts(dir / "timeseries.csv");
+  ts << "t,avg_nees_p,avg_nees_q,avg_nees_pose,avg_gamma,rms_p,band6_lo,band6_hi,band3_lo,band3_hi\n"
+     << std::setprecision(8);
+  for (size_t k = 0; k < s.t.size(); ++k) {
+    ts << s.t[k] << "," << s.avg_nees_p[k] << "," << s.avg_nees_q[k] << "," << s.avg_nees_pose[k] << ","
+       << s.avg_gamma[k] << "," << s.rms_p[k] << "," << s.pose_band.lo << "," << s.pose_band.hi << "," << b3.lo
+       << "," << b3.hi << "\n";
+  }
+  std::ofstream r(dir / "run0.csv");
+  r << "t,px,py,pz,ex,ey,ez,tx,ty,tz";
+  for (const char* n : {"e_p", "s_p", "e_q", "s_q", "e_v", "s_v", "e_ba", "s_ba", "e_bg", "s_bg", "e_p_sb", "s_p_sb",
+                        "e_q_sb", "s_q_sb", "e_p_ns", "s_p_ns", "e_q_ns", "s_q_ns"}) {
+    r << "," << n << "_x," << n << "_y," << n << "_z";
+  }
+  r << ",has_s,gamma,landmarks,new_landmarks,rejected,composed,nees_pose,update_ms\n" << std::setprecision(8);
+  for (const auto& m : run0.frames) {
+    r << m.t;
+    writeCsvRow(r, {m.p_true, m.p_est, m.p_true});
+    writeCsvRow(r, {m.e_p, m.s_p, m.e_q, m.s_q, m.e_v, m.s_v, m.e_ba, m.s_ba, m.e_bg, m.s_bg});
+    const Vec3 z = Vec3::Zero();
+    if (m.has_s) writeCsvRow(r, {m.e_p_sb, m.s_p_sb, m.e_q_sb, m.s_q_sb, m.e_p_ns, m.s_p_ns, m.e_q_ns, m.s_q_ns});
+    else writeCsvRow(r, {z, z, z, z, z, z, z, z});
+    r << "," << m.has_s << "," << m.gamma << "," << m.landmarks << "," << m.new_landmarks << "," << m.rejected << ","
+      << m.composed << "," << m.nees_pose << "," << m.update_ms << "\n";
+  }
+  std::ofstream l(dir / "landmarks_run0.csv");
+  l << "id,true_x,true_y,true_z,est_x,est_y,est_z\n" << std::setprecision(8);
+  for (const auto& [id, p] : run0.landmark_estimates) {
+    const Vec3& t = sc.world[static_cast<size_t>(id)].p_n;
+    l << id << "," << t.x() << "," << t.y() << "," << t.z() << "," << p.x() << "," << p.y() << "," << p.z() << "\n";
+  }
+}
+
+std::string jsonNumber(double v) {
+  if (!std::isfinite(v)) return "null";
+  std::ostringstream s;
+  s << std::setprecision(6) << v;
+  return s.str();
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  const Options o = parse(argc, argv);
+  sim::Scenario sc;
+  std::string traj_name = "builtin_hallway_walk";
+  try {
+    if (o.trajectory == "builtin") {
+      sc = sim::hallwayScenario(sim::HallwayParams(), o.density, o.seed);
+    } else {
+      sc = sim::tumScenario(o.trajectory, o.per_metre, o.seed);
+      traj_name = fs::path(o.trajectory).filename().string();
+    }
+  } catch (const std::exception& e) {
+    std::cerr << "error: " << e.what() << "\n";
+    return 1;
+  }
+  if (o.max_duration > 0.0) {
+    // Truncate by wrapping the trajectory's end time.
+    struct Truncated : sim::Trajectory {
+      std::shared_ptr<const sim::Trajectory> base;
+      double end;
+      double startTime() const override { return base->startTime(); }
+      double endTime() const override { return end; }
+      sim::TrajectorySample sample(double t) const override { return base->sample(t); }
+    };
+    auto t = std::make_shared<Truncated>();
+    t->base = sc.trajectory;
+    t->end = std::min(sc.trajectory->endTime(), sc.trajectory->startTime() + o.max_duration);
+    sc.trajectory = t;
+  }
+  const auto configs = makeConfigs(o, sc);
+  const double duration = sc.trajectory->endTime() - std::max(0.0, sc.trajectory->startTime());
+  std::printf("study: %s, %.1f s, %zu landmarks in the world, %d runs x %zu configurations, %d threads\n",
+              traj_name.c_str(), duration, sc.world.size(), o.runs, configs.size(), o.threads);
+
+  // All (configuration, run) jobs on a small thread pool. Run r uses seed + r for every
+  // configuration (common random numbers: the same noise for each filter).
+  std::vector<std::vector<sim::RunResult>> results(configs.size(), std::vector<sim::RunResult>(static_cast<size_t>(o.runs)));
+  std::atomic<int> next{0};
+  std::mutex print_mutex;
+  const int jobs = static_cast<int>(configs.size()) * o.runs;
+  auto worker = [&]() {
+    for (int j = next++; j < jobs; j = next++) {
+      const size_t c = static_cast<size_t>(j / o.runs);
+      const size_t r = static_cast<size_t>(j % o.runs);
+      results[c][r] = sim::runMonteCarloRun(sc, configs[c].second, o.seed * 1000003ULL + r);
+      std::lock_guard<std::mutex> lock(print_mutex);
+      std::fprintf(stderr, "\r  %d/%d runs done", j + 1, jobs);
+    }
+  };
+  std::vector<std::thread> pool;
+  for (int i = 0; i < o.threads; ++i) pool.emplace_back(worker);
+  for (auto& t : pool) t.join();
+  std::fprintf(stderr, "\n");
+
+  const fs::path out(o.out);
+  fs::create_directories(out);
+  {
+    std::ofstream w(out / "world.csv");
+    w << "id,x,y,z\n";
+    for (const auto& l : sc.world) w << l.id << "," << l.p_n.x() << "," << l.p_n.y() << "," << l.p_n.z() << "\n";
+  }
+  std::vector<sim::ConsistencySummary> sums;
+  for (size_t c = 0; c < configs.size(); ++c) {
+    sums.push_back(sim::summarize(configs[c].first, results[c]));
+    writeConfigFiles(out / configs[c].first, sums.back(), results[c][0], sc);
+  }
+
+  // summary.json: each configuration name -> metrics, plus the settings used.
+  std::ofstream js(out / "summary.json");
+  js << "{\n  \"config\": {\"trajectory\": \"" << traj_name << "\", \"seed\": " << o.seed << ", \"runs\": " << o.runs
+     << ", \"duration_s\": " << jsonNumber(duration) << ", \"world_landmarks\": " << sc.world.size()
+     << ", \"imu_rate_hz\": " << sc.imu.rate_hz << ", \"camera_rate_hz\": " << sc.cam.rate_hz
+     << ", \"pixel_noise_px\": " << sc.cam.pixel_noise_px
+     << ", \"accel_noise_density\": " << jsonNumber(sc.imu.noise.accel_noise_density)
+     << ", \"gyro_noise_density\": " << jsonNumber(sc.imu.noise.gyro_noise_density)
+     << ", \"accel_random_walk\": " << jsonNumber(sc.imu.noise.accel_random_walk)
+     << ", \"gyro_random_walk\": " << jsonNumber(sc.imu.noise.gyro_random_walk)
+     << ", \"pose_nees_band\": [" << jsonNumber(sums[0].pose_band.lo) << ", " << jsonNumber(sums[0].pose_band.hi) << "]}";
+  for (size_t c = 0; c < sums.size(); ++c) {
+    const auto& s = sums[c];
+    const auto& cfg = configs[c].second;
+    js << ",\n  \"" << s.name << "\": {\"mechanization\": \"" << toString(cfg.mechanization)
+       << "\", \"landmark_init\": \"" << toString(cfg.landmark_init) << "\", \"composition_trigger\": \""
+       << toString(cfg.composition_trigger) << "\", \"ate_position_m\": "
+       << jsonNumber(s.ate_position_m) << ", \"ate_orientation_deg\": " << jsonNumber(s.ate_orientation_deg)
+       << ", \"final_position_error_m\": " << jsonNumber(s.final_position_error_m)
+       << ", \"final_position_error_pct\": " << jsonNumber(s.final_position_error_pct)
+       << ", \"distance_m\": " << jsonNumber(s.distance_m) << ", \"nees_position\": " << jsonNumber(s.nees_position)
+       << ", \"nees_orientation\": " << jsonNumber(s.nees_orientation) << ", \"nees_pose\": " << jsonNumber(s.nees_pose)
+       << ", \"consistent_fraction\": " << jsonNumber(s.consistent_fraction)
+       << ", \"final_scale_ratio\": " << jsonNumber(s.final_scale_ratio) << ", \"runs\": " << s.runs
+       << ", \"filter_ms_mean\": " << jsonNumber(s.mean_update_ms) << ", \"filter_ms_p95\": " << jsonNumber(s.p95_update_ms)
+       << "}";
+  }
+  js << "\n}\n";
+
+  std::ostringstream md;
+  md << "# Study: " << traj_name << " (" << o.runs << " runs, seed " << o.seed << ", " << std::fixed
+     << std::setprecision(1) << duration << " s, " << sums[0].distance_m << " m)\n\n"
+     << "Pose NEES 95% band for the run average: [" << std::setprecision(2) << sums[0].pose_band.lo << ", "
+     << sums[0].pose_band.hi << "] (6 dof).\n\n"
+     << "| configuration | ATE pos [m] | ATE rot [deg] | final err [m] | final err [%] | NEES pos | NEES rot | NEES pose "
+        "| consistent | final gamma | filter [ms] |\n"
+     << "|---|---|---|---|---|---|---|---|---|---|---|\n";
+  for (const auto& s : sums) {
+    md << "| " << s.name << " | " << std::setprecision(3) << s.ate_position_m << " | " << s.ate_orientation_deg << " | "
+       << s.final_position_error_m << " | " << std::setprecision(2) << s.final_position_error_pct << " | "
+       << s.nees_position << " | " << s.nees_orientation << " | " << s.nees_pose << " | " << s.consistent_fraction
+       << " | " << std::setprecision(3) << s.final_scale_ratio << " | " << std::setprecision(2) << s.mean_update_ms
+       << " |\n";
+  }
+  std::ofstream(out / "summary.md") << md.str();
+  std::cout << "\n" << md.str() << "\nwritten to " << out << "\n";
+  return 0;
+}
