@@ -37,10 +37,18 @@ help:
 deps:
 	@bash tools/install_deps.sh
 
-# The catkin workspace lives outside the sources (git-ignored); its src/ links back here.
+# The catkin workspace lives outside the sources (git-ignored). Its src/vi_ekf_slam is a real
+# directory whose entries link to this repository's top-level items, so tools that follow
+# symlinks (rosrun, roslib) never loop back into the workspace.
+PKG_LINK := $(WS)/src/vi_ekf_slam
 workspace:
 	@mkdir -p $(WS)/src
-	@ln -sfn $(ROOT) $(WS)/src/vi_ekf_slam
+	@if [ -L $(PKG_LINK) ]; then rm $(PKG_LINK); fi
+	@mkdir -p $(PKG_LINK)
+	@find $(PKG_LINK) -maxdepth 1 -xtype l -delete
+	@for f in $$(ls -A $(ROOT)); do \
+	  case "$$f" in .catkin_ws|.git|results) ;; *) ln -sfn $(ROOT)/$$f $(PKG_LINK)/$$f ;; esac; \
+	done
 
 build: deps workspace
 	$(CATKIN)

@@ -57,7 +57,7 @@ def error_grid(d, rows, title, path):
         ax.set_xlabel("t [s]")
     fig.suptitle(title + "  (blue: error, green: +-3 sigma, red: new landmarks)", fontsize=10)
     fig.tight_layout()
-    fig.savefig(path, dpi=90)
+    fig.savefig(path, dpi=72)
     plt.close(fig)
 
 
@@ -77,7 +77,7 @@ def plot_config(out, cfg, world):
     ax.legend(fontsize=8, loc="best")
     ax.set_title(f"{cfg}: top view")
     fig.tight_layout()
-    fig.savefig(os.path.join(out, cfg, "topview.png"), dpi=90)
+    fig.savefig(os.path.join(out, cfg, "topview.png"), dpi=72)
     plt.close(fig)
     deg = 180.0 / np.pi
     error_grid(d, [("p", "pos [m]", 1.0), ("q", "rot [deg]", deg), ("v", "vel [m/s]", 1.0),
@@ -91,7 +91,7 @@ def plot_config(out, cfg, world):
     fig, ax = plt.subplots(figsize=(8, 3))
     mark_events(ax, d)
     ax.plot(d["t"], d["gamma"], label="run 0")
-    ax.plot(ts["t"], ts["avg_gamma"], label="run average")
+    ax.plot(ts["t"], ts["median_gamma"], label="run median")
     ax.axhline(1.0, color="k", lw=0.6)
     ax.set_xlabel("t [s]")
     ax.set_ylabel("scale ratio gamma")
@@ -143,11 +143,30 @@ def main():
     fig.tight_layout()
     fig.savefig(os.path.join(out, "nees_comparison.png"), dpi=90)
     plt.close(fig)
+    fig, ax = plt.subplots(figsize=(9, 3.5))
+    for cfg in configs:
+        ts = read_csv(os.path.join(out, cfg, "timeseries.csv"))
+        ax.plot(ts["t"], ts["median_gamma"], lw=1.0, label=cfg)
+    ax.axhline(1.0, color="k", lw=0.6)
+    ax.set_ylim(0.8, 1.6)
+    ax.set_xlabel("t [s]")
+    ax.set_ylabel("run-median gamma (eq. 34)")
+    ax.legend(fontsize=7)
+    ax.set_title(f"{summary['config']['trajectory']}: scale ratio, {summary['config']['runs']} runs")
+    fig.tight_layout()
+    fig.savefig(os.path.join(out, "gamma_comparison.png"), dpi=90)
+    plt.close(fig)
     if docs:
+        # Only the plots the README shows: the comparisons, and per-run plots of the paper's three
+        # configurations and of the best one.
         os.makedirs(docs, exist_ok=True)
-        shutil.copy(os.path.join(out, "nees_comparison.png"), os.path.join(docs, f"{prefix}_nees.png"))
-        for cfg in configs:
-            for name in ("topview", "errors", "errors_s", "gamma"):
+        for name in ("nees_comparison", "gamma_comparison"):
+            shutil.copy(os.path.join(out, name + ".png"), os.path.join(docs, f"{prefix}_{name}.png"))
+        best = "sensor_centric_composition+inverse_depth+every_update"
+        wanted = {"world_centric": ("topview", "errors"), "sensor_centric": ("errors",),
+                  "sensor_centric_composition": ("errors", "errors_s"), best: ("topview", "errors", "errors_s")}
+        for cfg, names in wanted.items():
+            for name in names:
                 src = os.path.join(out, cfg, name + ".png")
                 if os.path.exists(src):
                     shutil.copy(src, os.path.join(docs, f"{prefix}_{cfg}_{name}.png"))

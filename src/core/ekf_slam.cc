@@ -209,6 +209,19 @@ FrameResult EkfSlam::processFrame(const CameraFrame& frame) {
   return r;
 }
 
+bool EkfSlam::setConfig(const EkfSlamConfig& config, std::string* error) {
+  const std::string err = config.validate();
+  if (!err.empty()) {
+    if (error) *error = err;
+    return false;
+  }
+  const Mechanization previous = state_.mechanization();
+  config_ = config;
+  g_n_ = gravityInNav(config_.gravity_mps2);
+  if (config.mechanization != previous) setMechanization(config.mechanization);
+  return true;
+}
+
 void EkfSlam::setMechanization(Mechanization m) {
   config_.mechanization = m;
   if (initialized_) switchMechanization(state_, m);

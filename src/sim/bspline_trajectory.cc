@@ -1,5 +1,7 @@
 #include "vi_ekf_slam/sim/bspline_trajectory.h"
 
+#include "vi_ekf_slam/core/frames.h"
+
 #include <cmath>
 #include <memory>
 #include <stdexcept>
@@ -85,10 +87,8 @@ TrajectorySample BsplineTrajectory::sample(double t) const {
 }
 
 eval::StampedPose worldZUpToNav(const eval::StampedPose& pose_w) {
-  const Quat q_n_w(Eigen::AngleAxisd(M_PI, Vec3::UnitX()));
   eval::StampedPose p = pose_w;
-  p.p = q_n_w * pose_w.p;
-  p.q = (q_n_w * pose_w.q).normalized();
+  navToZUpWorld(pose_w.p, pose_w.q, &p.p, &p.q);  // the map is its own inverse
   return p;
 }
 

@@ -11,9 +11,9 @@ double smoothstep(double x) {
   return x * x * (3.0 - 2.0 * x);
 }
 
-/// Walking speed: start from rest over 1.5 s, slow down for the sharp turn.
+/// Walking speed: stand for standing_s, start from rest over 1.5 s, slow down for the sharp turn.
 double speedAt(const HallwayParams& p, double t) {
-  const double start = smoothstep(t / 1.5);
+  const double start = smoothstep((t - p.standing_s) / 1.5);
   const double dip = 1.0 - smoothstep(1.0 - std::abs(t - p.turn_time_s) / 1.5);  // 0 at the turn
   const double v = p.turn_speed_mps + (p.speed_mps - p.turn_speed_mps) * dip;
   return start * v;
@@ -112,8 +112,8 @@ std::shared_ptr<BsplineTrajectory> pedestrianWalk(const HallwayParams& p) {
   const double dt = 0.01;
   double s = 0.0, phase = 0.0;
   for (double t = -0.1; t <= p.duration_s + 0.1 + 1e-9; t += dt) {
-    const double v = t > 0.0 ? speedAt(p, t) : 0.0;
-    if (t > 0.0) {
+    const double v = t > p.standing_s ? speedAt(p, t) : 0.0;
+    if (t > p.standing_s) {
       s += v * dt;
       phase += 2.0 * M_PI * p.step_frequency_hz * dt;
     }

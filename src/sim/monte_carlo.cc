@@ -132,25 +132,23 @@ ConsistencySummary summarize(const std::string& name, const std::vector<RunResul
   int inside = 0, counted = 0;
   std::vector<double> times;
   for (size_t k = 0; k < T; ++k) {
-    double np = 0, nq = 0, npose = 0, g = 0, e2 = 0;
-    int g_n = 0;
+    double np = 0, nq = 0, npose = 0, e2 = 0;
+    std::vector<double> g;
     for (const auto& r : runs) {
       const FrameMetrics& f = r.frames[k];
       np += f.nees_p / M;
       nq += f.nees_q / M;
       npose += f.nees_pose / M;
       e2 += f.e_p.squaredNorm() / M;
-      if (std::isfinite(f.gamma)) {
-        g += f.gamma;
-        ++g_n;
-      }
+      if (std::isfinite(f.gamma)) g.push_back(f.gamma);
       times.push_back(f.update_ms);
     }
     s.t.push_back(runs.front().frames[k].t);
     s.avg_nees_p.push_back(np);
     s.avg_nees_q.push_back(nq);
     s.avg_nees_pose.push_back(npose);
-    s.avg_gamma.push_back(g_n ? g / g_n : std::nan(""));
+    std::sort(g.begin(), g.end());
+    s.median_gamma.push_back(g.empty() ? std::nan("") : g[g.size() / 2]);
     s.rms_p.push_back(std::sqrt(e2));
     if (std::isfinite(npose)) {
       ++counted;

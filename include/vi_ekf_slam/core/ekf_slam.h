@@ -51,6 +51,11 @@ class EkfSlam {
   /// Propagates to the image time, updates with known landmarks, adds new ones and composes.
   FrameResult processFrame(const CameraFrame& frame);
 
+  /// Applies a new configuration to the running filter: validates it (false and the problems in
+  /// *error otherwise), converts the mechanization if it changed, and uses every other value
+  /// from now on (new landmarks, next IMU samples, next update).
+  bool setConfig(const EkfSlamConfig& config, std::string* error = nullptr);
+
   /// Converts the running filter to another mechanization, keeping the map.
   void setMechanization(Mechanization m);
   Mechanization mechanization() const { return state_.mechanization(); }

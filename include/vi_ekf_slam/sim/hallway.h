@@ -27,7 +27,8 @@ struct Quad {
 };
 
 struct HallwayParams {
-  double duration_s = 35.0;
+  double standing_s = 0.0;          ///< the rig stands still this long before walking (static init)
+  double duration_s = 35.0;         ///< all times are from the start, standing included
   double speed_mps = 1.3;           ///< walking speed
   double turn_time_s = 23.0;        ///< middle of the 90 deg right turn
   double turn_radius_m = 0.6;       ///< a sharp turn

@@ -1,0 +1,83 @@
+// The visual front end (OpenCV): corners spread over a grid (Shi-Tomasi or FAST), pyramidal
+// Lucas-Kanade tracking from frame to frame with the gyro-predicted rotation as initial guess,
+// a forward-backward check and RANSAC on the epipolar constraint. Tracks keep their id while
+// they live; ids are never reused, so a lost track ends its landmark.
+#pragma once
+
+#include <cstdint>
+#include <optional>
+#include <opencv2/core.hpp>
+#include <string>
+#include <vector>
+
+#include "vi_ekf_slam/core/camera_model.h"
+#include "vi_ekf_slam/core/types.h"
+
+namespace vi_ekf_slam {
+
+struct TrackerParams {
+  enum class Detector { kShiTomasi, kFast };
+  Detector detector = Detector::kShiTomasi;
+  int max_tracks = 150;             ///< target number of tracks
+  int grid_cols = 8;                ///< new corners are spread over this grid
+  int grid_rows = 6;
+  double min_distance_px = 12.0;    ///< minimum distance between corners [px]
+  double quality_level = 0.01;      ///< Shi-Tomasi quality relative to the best corner
+  int fast_threshold = 20;          ///< FAST intensity threshold [gray levels]
+  int klt_window_px = 21;           ///< KLT window size [px]
+  int klt_pyramid_levels = 3;       ///< KLT pyramid levels above the image
+  double fb_threshold_px = 1.0;     ///< forward-backward error bound [px]
+  double ransac_threshold_px = 1.0; ///< epipolar RANSAC threshold (undistorted) [px]
+  int border_px = 8;                ///< corners this close to the border are dropped [px]
+  /// Empty if usable, otherwise what is wrong.
+  std::string validate() const;
+};
+std::optional<TrackerParams::Detector> detectorFromString(const std::string& s);
+
+struct TrackerStats {
+  int tracked = 0;         ///< tracks continued from the previous image
+  int lost = 0;            ///< KLT failures and tracks that left the image
+  int fb_rejected = 0;     ///< failed the forward-backward check
+  int ransac_rejected = 0; ///< epipolar outliers
+  int detected = 0;        ///< new tracks
+  int total = 0;           ///< tracks in this image
+};
+
+class FeatureTracker {
+ public:
+  FeatureTracker(const CameraModel& camera, const TrackerParams& params);
+
+  /// Tracks into a mono8 image. R_cur_prev: rotation of the camera from the previous image to
+  /// this one (vectors in the previous camera frame to the current one), e.g. from the gyro;
+  /// it only seeds KLT. Returns the features of this image with their track ids.
+  CameraFrame track(double timestamp, const cv::Mat& mono8, const std::optional<Eigen::Matrix3d>& R_cur_prev);
+
+  const TrackerStats& stats() const { return stats_; }
+  const TrackerParams& params() const { return params_; }
+  void setParams(const TrackerParams& params) { params_ = params; }
+  /// Forgets every track (ids keep increasing).
+  void reset();
+
+  /// The image in colour with every track, its recent path and its id (for the debug topic).
+  cv::Mat drawTracks(const cv::Mat& mono8) const;
+
+ private:
+  struct Track {
+    std::int64_t id;
+    cv::Point2f uv;
+    int age;
+    std::vector<cv::Point2f> history;
+  };
+  void detect(const cv::Mat& img);
+  cv::Point2f predict(const cv::Point2f& uv, const Eigen::Matrix3d& R_cur_prev) const;
+
+  CameraModel camera_;
+  TrackerParams params_;
+  std::vector<cv::Mat> prev_pyramid_;
+  cv::Mat prev_image_;
+  std::vector<Track> tracks_;
+  std::int64_t next_id_ = 0;
+  TrackerStats stats_;
+};
+
+}  // namespace vi_ekf_slam

@@ -1,0 +1,187 @@
+#include "vi_ekf_slam/core/feature_tracker.h"
+
+#include <algorithm>
+#include <opencv2/calib3d.hpp>
+#include <opencv2/features2d.hpp>
+#include <opencv2/imgproc.hpp>
+#include <opencv2/video/tracking.hpp>
+#include <sstream>
+
+namespace vi_ekf_slam {
+
+std::string TrackerParams::validate() const {
+  std::ostringstream err;
+  if (max_tracks < 8) err << "max_tracks must be >= 8 (RANSAC needs 8 points)\n";
+  if (grid_cols < 1 || grid_rows < 1) err << "grid_cols and grid_rows must be >= 1\n";
+  if (!(min_distance_px >= 1.0)) err << "min_distance_px must be >= 1 px\n";
+  if (!(quality_level > 0.0 && quality_level < 1.0)) err << "quality_level must be in (0, 1)\n";
+  if (fast_threshold < 1) err << "fast_threshold must be >= 1\n";
+  if (klt_window_px < 5 || klt_window_px % 2 == 0) err << "klt_window_px must be odd and >= 5\n";
+  if (klt_pyramid_levels < 0 || klt_pyramid_levels > 6) err << "klt_pyramid_levels must be in [0, 6]\n";
+  if (!(fb_threshold_px > 0.0)) err << "fb_threshold_px must be > 0\n";
+  if (!(ransac_threshold_px > 0.0)) err << "ransac_threshold_px must be > 0\n";
+  if (border_px < 0) err << "border_px must be >= 0\n";
+  return err.str();
+}
+
+std::optional<TrackerParams::Detector> detectorFromString(const std::string& s) {
+  if (s == "shi_tomasi") return TrackerParams::Detector::kShiTomasi;
+  if (s == "fast") return TrackerParams::Detector::kFast;
+  return std::nullopt;
+}
+
+FeatureTracker::FeatureTracker(const CameraModel& camera, const TrackerParams& params)
+    : camera_(camera), params_(params) {}
+
+void FeatureTracker::reset() {
+  tracks_.clear();
+  prev_pyramid_.clear();
+  prev_image_.release();
+}
+
+cv::Point2f FeatureTracker::predict(const cv::Point2f& uv, const Eigen::Matrix3d& R_cur_prev) const {
+  // Rotation-only prediction (infinite homography), through the lens model.
+  Eigen::Vector2d xn;
+  if (!camera_.pixelToNormalized(Eigen::Vector2d(uv.x, uv.y), &xn)) return uv;
+  const Eigen::Vector3d r = R_cur_prev * Eigen::Vector3d(xn.x(), xn.y(), 1.0);
+  if (r.z() < 0.1) return uv;
+  const Eigen::Vector2d p = camera_.normalizedToPixel(Eigen::Vector2d(r.x() / r.z(), r.y() / r.z()));
+  return {static_cast<float>(p.x()), static_cast<float>(p.y())};
+}
+
+CameraFrame FeatureTracker::track(double timestamp, const cv::Mat& img, const std::optional<Eigen::Matrix3d>& R_cur_prev) {
+  CV_Assert(img.type() == CV_8UC1);
+  stats_ = TrackerStats();
+  const cv::Size win(params_.klt_window_px, params_.klt_window_px);
+  std::vector<cv::Mat> pyramid;
+  cv::buildOpticalFlowPyramid(img, pyramid, win, params_.klt_pyramid_levels);
+  const bool same_size = !prev_image_.empty() && prev_image_.size() == img.size();
+  if (!tracks_.empty() && same_size) {
+    std::vector<cv::Point2f> p0, p1, p0_back;
+    for (const auto& t : tracks_) {
+      p0.push_back(t.uv);
+      p1.push_back(R_cur_prev ? predict(t.uv, *R_cur_prev) : t.uv);
+    }
+    std::vector<uchar> st, st_back;
+    std::vector<float> err;
+    const cv::TermCriteria crit(cv::TermCriteria::COUNT | cv::TermCriteria::EPS, 30, 0.01);
+    cv::calcOpticalFlowPyrLK(prev_pyramid_, pyramid, p0, p1, st, err, win, params_.klt_pyramid_levels, crit,
+                             cv::OPTFLOW_USE_INITIAL_FLOW);
+    p0_back = p0;
+    cv::calcOpticalFlowPyrLK(pyramid, prev_pyramid_, p1, p0_back, st_back, err, win, params_.klt_pyramid_levels, crit,
+                             cv::OPTFLOW_USE_INITIAL_FLOW);
+    std::vector<Track> kept;
+    std::vector<cv::Point2f> n0, n1;  // undistorted pixel coordinates for RANSAC
+    const double b = params_.border_px;
+    for (size_t i = 0; i < tracks_.size(); ++i) {
+      const cv::Point2f& q = p1[i];
+      if (!st[i] || q.x < b || q.y < b || q.x > img.cols - 1 - b || q.y > img.rows - 1 - b) {
+        ++stats_.lost;
+        continue;
+      }
+      if (!st_back[i] || cv::norm(p0_back[i] - p0[i]) > params_.fb_threshold_px) {
+        ++stats_.fb_rejected;
+        continue;
+      }
+      Eigen::Vector2d a, c;
+      if (!camera_.pixelToNormalized(Eigen::Vector2d(p0[i].x, p0[i].y), &a) ||
+          !camera_.pixelToNormalized(Eigen::Vector2d(q.x, q.y), &c)) {
+        ++stats_.lost;
+        continue;
+      }
+      const auto& K = camera_.intrinsics();
+      n0.emplace_back(static_cast<float>(K.fx * a.x() + K.cx), static_cast<float>(K.fy * a.y() + K.cy));
+      n1.emplace_back(static_cast<float>(K.fx * c.x() + K.cx), static_cast<float>(K.fy * c.y() + K.cy));
+      Track t = tracks_[i];
+      t.uv = q;
+      ++t.age;
+      t.history.push_back(q);
+      if (t.history.size() > 10) t.history.erase(t.history.begin());
+      kept.push_back(std::move(t));
+    }
+    // Epipolar RANSAC on undistorted points; skipped with too few points to be meaningful.
+    if (kept.size() >= 12) {
+      std::vector<uchar> inlier;
+      const cv::Mat F = cv::findFundamentalMat(n0, n1, cv::FM_RANSAC, params_.ransac_threshold_px, 0.99, inlier);
+      if (!F.empty() && inlier.size() == kept.size()) {
+        std::vector<Track> in;
+        for (size_t i = 0; i < kept.size(); ++i) {
+          if (inlier[i]) in.push_back(std::move(kept[i]));
+          else ++stats_.ransac_rejected;
+        }
+        kept = std::move(in);
+      }
+    }
+    tracks_ = std::move(kept);
+    stats_.tracked = static_cast<int>(tracks_.size());
+  } else {
+    tracks_.clear();
+  }
+  if (static_cast<int>(tracks_.size()) < params_.max_tracks) detect(img);
+  prev_pyramid_ = std::move(pyramid);
+  prev_image_ = img;
+  CameraFrame f;
+  f.timestamp = timestamp;
+  for (const auto& t : tracks_) f.features.push_back({t.id, Eigen::Vector2d(t.uv.x, t.uv.y)});
+  stats_.total = static_cast<int>(tracks_.size());
+  return f;
+}
+
+void FeatureTracker::detect(const cv::Mat& img) {
+  const int cols = params_.grid_cols, rows = params_.grid_rows;
+  const int cells = cols * rows;
+  const int quota = (params_.max_tracks + cells - 1) / cells;
+  auto cellOf = [&](const cv::Point2f& p) {
+    const int c = std::clamp(static_cast<int>(p.x * cols / img.cols), 0, cols - 1);
+    const int r = std::clamp(static_cast<int>(p.y * rows / img.rows), 0, rows - 1);
+    return r * cols + c;
+  };
+  std::vector<int> count(static_cast<size_t>(cells), 0);
+  cv::Mat mask(img.size(), CV_8UC1, cv::Scalar(0));
+  const int b = params_.border_px;
+  mask(cv::Rect(b, b, img.cols - 2 * b, img.rows - 2 * b)).setTo(255);
+  for (const auto& t : tracks_) {
+    ++count[static_cast<size_t>(cellOf(t.uv))];
+    cv::circle(mask, t.uv, static_cast<int>(params_.min_distance_px), cv::Scalar(0), -1);
+  }
+  // Candidates, strongest first.
+  std::vector<cv::Point2f> cand;
+  const int want = params_.max_tracks - static_cast<int>(tracks_.size());
+  if (params_.detector == TrackerParams::Detector::kShiTomasi) {
+    cv::goodFeaturesToTrack(img, cand, std::max(want * 4, 64), params_.quality_level, params_.min_distance_px, mask, 3);
+  } else {
+    std::vector<cv::KeyPoint> kps;
+    cv::FAST(img, kps, params_.fast_threshold, true);
+    std::sort(kps.begin(), kps.end(), [](const auto& a, const auto& c) { return a.response > c.response; });
+    for (const auto& k : kps) {
+      if (mask.at<uchar>(cv::Point(k.pt)) == 0) continue;
+      cand.push_back(k.pt);
+      cv::circle(mask, k.pt, static_cast<int>(params_.min_distance_px), cv::Scalar(0), -1);
+    }
+  }
+  // Fill the emptiest cells first: a cell takes candidates up to its quota.
+  int added = 0;
+  for (const auto& p : cand) {
+    if (added >= want) break;
+    const size_t c = static_cast<size_t>(cellOf(p));
+    if (count[c] >= quota) continue;
+    ++count[c];
+    tracks_.push_back({next_id_++, p, 1, {p}});
+    ++added;
+  }
+  stats_.detected = added;
+}
+
+cv::Mat FeatureTracker::drawTracks(const cv::Mat& mono8) const {
+  cv::Mat out;
+  cv::cvtColor(mono8, out, cv::COLOR_GRAY2BGR);
+  for (const auto& t : tracks_) {
+    const cv::Scalar col = t.age > 5 ? cv::Scalar(0, 255, 0) : cv::Scalar(0, 200, 255);
+    for (size_t i = 1; i < t.history.size(); ++i) cv::line(out, t.history[i - 1], t.history[i], col, 1, cv::LINE_AA);
+    cv::circle(out, t.uv, 3, col, 1, cv::LINE_AA);
+    cv::putText(out, std::to_string(t.id), t.uv + cv::Point2f(4, -4), cv::FONT_HERSHEY_PLAIN, 0.7, col, 1);
+  }
+  return out;
+}
+
+}  // namespace vi_ekf_slam

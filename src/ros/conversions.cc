@@ -1,0 +1,210 @@
+#include "vi_ekf_slam/ros/conversions.h"
+
+#include <Eigen/Eigenvalues>
+#include <cmath>
+#include <cv_bridge/cv_bridge.h>
+#include <opencv2/imgproc.hpp>
+#include <sensor_msgs/image_encodings.h>
+#include <sensor_msgs/point_cloud2_iterator.h>
+#include <sstream>
+
+#include "vi_ekf_slam/core/frames.h"
+
+namespace vi_ekf_slam::glue {
+
+namespace enc = sensor_msgs::image_encodings;
+
+std::optional<ImuData> fromImuMsg(const sensor_msgs::Imu& m) {
+  ImuData d;
+  d.timestamp = m.header.stamp.toSec();
+  d.wm = Eigen::Vector3d(m.angular_velocity.x, m.angular_velocity.y, m.angular_velocity.z);
+  d.am = Eigen::Vector3d(m.linear_acceleration.x, m.linear_acceleration.y, m.linear_acceleration.z);
+  if (!d.wm.allFinite() || !d.am.allFinite() || !std::isfinite(d.timestamp)) return std::nullopt;
+  return d;
+}
+
+std::string intrinsicsFromCameraInfo(const sensor_msgs::CameraInfo& m, CameraIntrinsics* out) {
+  CameraIntrinsics c;
+  c.width = static_cast<int>(m.width);
+  c.height = static_cast<int>(m.height);
+  c.fx = m.K[0];
+  c.fy = m.K[4];
+  c.cx = m.K[2];
+  c.cy = m.K[5];
+  c.distortion.assign(m.D.begin(), m.D.end());
+  if (m.distortion_model == "plumb_bob" || m.distortion_model == "rational_polynomial") {
+    c.model = DistortionModel::kRadTan;
+    if (c.distortion.size() > 5) {
+      for (size_t i = 5; i < c.distortion.size(); ++i) {
+        if (c.distortion[i] != 0.0) return "rational_polynomial with non-zero k4..k6 is not supported";
+      }
+      c.distortion.resize(5);
+    }
+    bool all_zero = true;
+    for (double d : c.distortion) all_zero = all_zero && d == 0.0;
+    if (all_zero) {
+      c.model = DistortionModel::kNone;
+      c.distortion.clear();
+    }
+  } else if (m.distortion_model == "equidistant") {
+    c.model = DistortionModel::kEquidistant;
+  } else if (m.distortion_model.empty() && m.D.empty()) {
+    c.model = DistortionModel::kNone;
+  } else {
+    return "unsupported distortion model '" + m.distortion_model + "' (plumb_bob, equidistant)";
+  }
+  const std::string err = c.validate();
+  if (!err.empty()) return "camera_info: " + err;
+  *out = c;
+  return "";
+}
+
+std::string toMono8(const sensor_msgs::Image& msg, cv::Mat* out) {
+  cv_bridge::CvImageConstPtr cv;
+  try {
+    // Share the buffer; the conversions below copy.
+    cv = cv_bridge::toCvCopy(msg);
+  } catch (const cv_bridge::Exception& e) {
+    return std::string("cv_bridge: ") + e.what();
+  }
+  const std::string& e = msg.encoding;
+  if (cv->image.empty()) return "empty image";
+  if (e == enc::MONO8 || e == enc::TYPE_8UC1) {
+    *out = cv->image;
+  } else if (e == enc::MONO16 || e == enc::TYPE_16UC1) {
+    cv->image.convertTo(*out, CV_8U, 1.0 / 256.0);
+  } else if (e == enc::BGR8) {
+    cv::cvtColor(cv->image, *out, cv::COLOR_BGR2GRAY);
+  } else if (e == enc::RGB8) {
+    cv::cvtColor(cv->image, *out, cv::COLOR_RGB2GRAY);
+  } else if (e == enc::BGRA8) {
+    cv::cvtColor(cv->image, *out, cv::COLOR_BGRA2GRAY);
+  } else if (e == enc::RGBA8) {
+    cv::cvtColor(cv->image, *out, cv::COLOR_RGBA2GRAY);
+  } else {
+    return "unsupported image encoding '" + e + "' (mono8, mono16, bgr8, rgb8, bgra8, rgba8)";
+  }
+  return "";
+}
+
+CameraExtrinsics extrinsicsFromTransform(const geometry_msgs::Transform& t) {
+  CameraExtrinsics T;
+  const Quat q(t.rotation.w, t.rotation.x, t.rotation.y, t.rotation.z);
+  T.R_b_c = q.normalized().toRotationMatrix();
+  T.p_b_c = Vec3(t.translation.x, t.translation.y, t.translation.z);
+  return T;
+}
+
+nav_msgs::Odometry toOdometry(const NavState& nav, const Eigen::Vector3d& w_b, double w_var, const ros::Time& stamp,
+                              const std::string& world_frame, const std::string& body_frame) {
+  nav_msgs::Odometry o;
+  o.header.stamp = stamp;
+  o.header.frame_id = world_frame;
+  o.child_frame_id = body_frame;
+  Vec3 p_w;
+  Quat q_w_b;
+  navToZUpWorld(nav.p_n_b, nav.q_n_b, &p_w, &q_w_b);
+  o.pose.pose.position.x = p_w.x();
+  o.pose.pose.position.y = p_w.y();
+  o.pose.pose.position.z = p_w.z();
+  o.pose.pose.orientation.w = q_w_b.w();
+  o.pose.pose.orientation.x = q_w_b.x();
+  o.pose.pose.orientation.y = q_w_b.y();
+  o.pose.pose.orientation.z = q_w_b.z();
+  // Pose covariance [position, orientation] in the world frame: both blocks rotate with R_w_n
+  // (the orientation error is a global rotation vector).
+  const Mat3 R_w_n = zUpWorldFromNav().toRotationMatrix();
+  Eigen::Matrix<double, 6, 6> G = Eigen::Matrix<double, 6, 6>::Zero();
+  G.topLeftCorner<3, 3>() = R_w_n;
+  G.bottomRightCorner<3, 3>() = R_w_n;
+  const Eigen::Matrix<double, 6, 6> Pw = G * nav.poseCovariance() * G.transpose();
+  // Twist in the body frame: v_b = R_n_b^T v_n.
+  const Mat3 R_b_n = nav.q_n_b.conjugate().toRotationMatrix();
+  const Vec3 v_b = R_b_n * nav.v_n_b;
+  o.twist.twist.linear.x = v_b.x();
+  o.twist.twist.linear.y = v_b.y();
+  o.twist.twist.linear.z = v_b.z();
+  o.twist.twist.angular.x = w_b.x();
+  o.twist.twist.angular.y = w_b.y();
+  o.twist.twist.angular.z = w_b.z();
+  Eigen::Matrix<double, 6, 6> Tw = Eigen::Matrix<double, 6, 6>::Zero();
+  // v_b = R^T v_n -> cov R^T P_v R (+ the attitude term, small at walking speed; omitted).
+  Tw.topLeftCorner<3, 3>() = R_b_n * nav.cov.block<3, 3>(idx::kV, idx::kV) * R_b_n.transpose();
+  Tw.bottomRightCorner<3, 3>() = nav.cov.block<3, 3>(idx::kBg, idx::kBg) + w_var * Mat3::Identity();
+  for (int i = 0; i < 6; ++i) {
+    for (int j = 0; j < 6; ++j) {
+      o.pose.covariance[static_cast<size_t>(6 * i + j)] = Pw(i, j);
+      o.twist.covariance[static_cast<size_t>(6 * i + j)] = Tw(i, j);
+    }
+  }
+  return o;
+}
+
+geometry_msgs::TransformStamped toTransform(const NavState& nav, const ros::Time& stamp, const std::string& world_frame,
+                                            const std::string& body_frame) {
+  geometry_msgs::TransformStamped t;
+  t.header.stamp = stamp;
+  t.header.frame_id = world_frame;
+  t.child_frame_id = body_frame;
+  Vec3 p_w;
+  Quat q_w_b;
+  navToZUpWorld(nav.p_n_b, nav.q_n_b, &p_w, &q_w_b);
+  t.transform.translation.x = p_w.x();
+  t.transform.translation.y = p_w.y();
+  t.transform.translation.z = p_w.z();
+  t.transform.rotation.w = q_w_b.w();
+  t.transform.rotation.x = q_w_b.x();
+  t.transform.rotation.y = q_w_b.y();
+  t.transform.rotation.z = q_w_b.z();
+  return t;
+}
+
+sensor_msgs::PointCloud2 toPointCloud(const std::vector<NavLandmark>& lms, const ros::Time& stamp,
+                                      const std::string& world_frame) {
+  sensor_msgs::PointCloud2 c;
+  c.header.stamp = stamp;
+  c.header.frame_id = world_frame;
+  c.height = 1;
+  sensor_msgs::PointCloud2Modifier mod(c);
+  mod.setPointCloud2Fields(5, "x", 1, sensor_msgs::PointField::FLOAT32, "y", 1, sensor_msgs::PointField::FLOAT32, "z",
+                           1, sensor_msgs::PointField::FLOAT32, "id", 1, sensor_msgs::PointField::UINT32, "sigma", 1,
+                           sensor_msgs::PointField::FLOAT32);
+  std::vector<const NavLandmark*> finite;
+  for (const auto& l : lms) {
+    if (l.p_n_l.allFinite() && l.cov.allFinite()) finite.push_back(&l);
+  }
+  mod.resize(finite.size());
+  sensor_msgs::PointCloud2Iterator<float> x(c, "x"), y(c, "y"), z(c, "z"), sigma(c, "sigma");
+  sensor_msgs::PointCloud2Iterator<uint32_t> id(c, "id");
+  const Quat q_w_n = zUpWorldFromNav();
+  for (const NavLandmark* l : finite) {
+    const Vec3 p = q_w_n * l->p_n_l;
+    *x = static_cast<float>(p.x());
+    *y = static_cast<float>(p.y());
+    *z = static_cast<float>(p.z());
+    *id = static_cast<uint32_t>(l->id);
+    const double lmax = Eigen::SelfAdjointEigenSolver<Mat3>(l->cov, Eigen::EigenvaluesOnly).eigenvalues().maxCoeff();
+    *sigma = static_cast<float>(std::sqrt(std::max(0.0, lmax)));
+    ++x, ++y, ++z, ++id, ++sigma;
+  }
+  return c;
+}
+
+bool allFinite(const nav_msgs::Odometry& o) {
+  const auto& p = o.pose.pose;
+  const auto& t = o.twist.twist;
+  const double v[] = {p.position.x, p.position.y, p.position.z, p.orientation.w, p.orientation.x, p.orientation.y,
+                      p.orientation.z, t.linear.x, t.linear.y, t.linear.z, t.angular.x, t.angular.y, t.angular.z};
+  for (double x : v) {
+    if (!std::isfinite(x)) return false;
+  }
+  for (double x : o.pose.covariance) {
+    if (!std::isfinite(x)) return false;
+  }
+  for (double x : o.twist.covariance) {
+    if (!std::isfinite(x)) return false;
+  }
+  return true;
+}
+
+}  // namespace vi_ekf_slam::glue

@@ -1,0 +1,252 @@
+#include "vi_ekf_slam/ros/params.h"
+
+#include <cmath>
+#include <sstream>
+
+namespace vi_ekf_slam::glue {
+
+namespace {
+
+std::optional<CompositionTrigger> triggerFromString(const std::string& s) {
+  for (auto t : {CompositionTrigger::kNewLandmarks, CompositionTrigger::kEveryUpdate, CompositionTrigger::kNever}) {
+    if (toString(t) == s) return t;
+  }
+  return std::nullopt;
+}
+
+/// Reads ~name into value when set; a value of the wrong type is an error, not a silent default.
+class ParamReader {
+ public:
+  ParamReader(const ros::NodeHandle& nh, std::ostringstream& err) : nh_(nh), err_(err) {}
+  template <typename T>
+  void operator()(const std::string& name, T& value) {
+    if (!nh_.hasParam(name)) return;
+    T v;
+    if (nh_.getParam(name, v)) {
+      value = v;
+      return;
+    }
+    err_ << name << " has the wrong type\n";
+  }
+  void operator()(const std::string& name, double& value) {
+    if (!nh_.hasParam(name)) return;
+    double d;
+    int i;
+    if (nh_.getParam(name, d)) value = d;
+    else if (nh_.getParam(name, i)) value = i;  // an integer literal is a fine double
+    else err_ << name << " must be a number\n";
+  }
+
+ private:
+  const ros::NodeHandle& nh_;
+  std::ostringstream& err_;
+};
+
+std::string detectorName(TrackerParams::Detector d) {
+  return d == TrackerParams::Detector::kFast ? "fast" : "shi_tomasi";
+}
+
+/// The parameters shared with dynamic_reconfigure, in one place for both directions.
+std::string fromReconfigure(const EkfSlamReconfigureConfig& c, NodeParams* p) {
+  std::ostringstream err;
+  EkfSlamConfig& f = p->filter;
+  if (auto m = mechanizationFromString(c.mechanization)) f.mechanization = *m;
+  else err << "mechanization: unknown '" << c.mechanization << "'\n";
+  if (auto t = triggerFromString(c.composition_trigger)) f.composition_trigger = *t;
+  else err << "composition_trigger: unknown '" << c.composition_trigger << "'\n";
+  if (auto i = landmarkInitFromString(c.landmark_init)) f.landmark_init = *i;
+  else err << "landmark_init: unknown '" << c.landmark_init << "'\n";
+  f.composition_new_landmarks = c.composition_new_landmarks;
+  f.update.pixel_noise_px = c.pixel_noise_px;
+  f.update.gate_probability = c.gate_probability;
+  f.landmark_depth_m = c.landmark_depth_m;
+  f.landmark_depth_sigma_m = c.landmark_depth_sigma_m;
+  f.inverse_depth_initial_m = c.inverse_depth_initial_m;
+  f.inverse_depth_sigma = c.inverse_depth_sigma;
+  f.max_landmarks = c.max_landmarks;
+  f.landmark_timeout_s = c.landmark_timeout_s;
+  f.imu_noise.accel_noise_density = c.accel_noise_density;
+  f.imu_noise.gyro_noise_density = c.gyro_noise_density;
+  f.imu_noise.accel_random_walk = c.accel_random_walk;
+  f.imu_noise.gyro_random_walk = c.gyro_random_walk;
+  TrackerParams& t = p->tracker;
+  if (auto d = detectorFromString(c.detector)) t.detector = *d;
+  else err << "detector: unknown '" << c.detector << "'\n";
+  t.max_tracks = c.max_tracks;
+  t.min_distance_px = c.min_distance_px;
+  t.quality_level = c.quality_level;
+  t.fast_threshold = c.fast_threshold;
+  t.klt_window_px = c.klt_window_px;
+  t.klt_pyramid_levels = c.klt_pyramid_levels;
+  t.fb_threshold_px = c.fb_threshold_px;
+  t.ransac_threshold_px = c.ransac_threshold_px;
+  err << f.validate() << t.validate();
+  return err.str();
+}
+
+}  // namespace
+
+EkfSlamReconfigureConfig toReconfigure(const NodeParams& p) {
+  EkfSlamReconfigureConfig c = EkfSlamReconfigureConfig::__getDefault__();
+  const EkfSlamConfig& f = p.filter;
+  c.mechanization = toString(f.mechanization);
+  c.composition_trigger = toString(f.composition_trigger);
+  c.landmark_init = toString(f.landmark_init);
+  c.composition_new_landmarks = f.composition_new_landmarks;
+  c.pixel_noise_px = f.update.pixel_noise_px;
+  c.gate_probability = f.update.gate_probability;
+  c.landmark_depth_m = f.landmark_depth_m;
+  c.landmark_depth_sigma_m = f.landmark_depth_sigma_m;
+  c.inverse_depth_initial_m = f.inverse_depth_initial_m;
+  c.inverse_depth_sigma = f.inverse_depth_sigma;
+  c.max_landmarks = f.max_landmarks;
+  c.landmark_timeout_s = f.landmark_timeout_s;
+  c.accel_noise_density = f.imu_noise.accel_noise_density;
+  c.gyro_noise_density = f.imu_noise.gyro_noise_density;
+  c.accel_random_walk = f.imu_noise.accel_random_walk;
+  c.gyro_random_walk = f.imu_noise.gyro_random_walk;
+  const TrackerParams& t = p.tracker;
+  c.detector = detectorName(t.detector);
+  c.max_tracks = t.max_tracks;
+  c.min_distance_px = t.min_distance_px;
+  c.quality_level = t.quality_level;
+  c.fast_threshold = t.fast_threshold;
+  c.klt_window_px = t.klt_window_px;
+  c.klt_pyramid_levels = t.klt_pyramid_levels;
+  c.fb_threshold_px = t.fb_threshold_px;
+  c.ransac_threshold_px = t.ransac_threshold_px;
+  return c;
+}
+
+std::string applyReconfigure(const EkfSlamReconfigureConfig& c, NodeParams* p) {
+  NodeParams candidate = *p;
+  const std::string err = fromReconfigure(c, &candidate);
+  if (err.empty()) *p = candidate;
+  return err;
+}
+
+std::string loadParams(const ros::NodeHandle& pnh, NodeParams* out) {
+  NodeParams p;
+  std::ostringstream err;
+  ParamReader rd(pnh, err);
+  // Shared with dynamic_reconfigure: start from its defaults, overwrite with ~params.
+  EkfSlamReconfigureConfig c = toReconfigure(p);
+  rd("mechanization", c.mechanization);
+  rd("composition_trigger", c.composition_trigger);
+  rd("composition_new_landmarks", c.composition_new_landmarks);
+  rd("pixel_noise_px", c.pixel_noise_px);
+  rd("gate_probability", c.gate_probability);
+  rd("landmark_init", c.landmark_init);
+  rd("landmark_depth_m", c.landmark_depth_m);
+  rd("landmark_depth_sigma_m", c.landmark_depth_sigma_m);
+  rd("inverse_depth_initial_m", c.inverse_depth_initial_m);
+  rd("inverse_depth_sigma", c.inverse_depth_sigma);
+  rd("max_landmarks", c.max_landmarks);
+  rd("landmark_timeout_s", c.landmark_timeout_s);
+  rd("accel_noise_density", c.accel_noise_density);
+  rd("gyro_noise_density", c.gyro_noise_density);
+  rd("accel_random_walk", c.accel_random_walk);
+  rd("gyro_random_walk", c.gyro_random_walk);
+  rd("detector", c.detector);
+  rd("max_tracks", c.max_tracks);
+  rd("min_distance_px", c.min_distance_px);
+  rd("quality_level", c.quality_level);
+  rd("fast_threshold", c.fast_threshold);
+  rd("klt_window_px", c.klt_window_px);
+  rd("klt_pyramid_levels", c.klt_pyramid_levels);
+  rd("fb_threshold_px", c.fb_threshold_px);
+  rd("ransac_threshold_px", c.ransac_threshold_px);
+
+  // Start-up only.
+  EkfSlamConfig& f = p.filter;
+  rd("gravity_mps2", f.gravity_mps2);
+  rd("max_imu_gap_s", f.max_imu_gap_s);
+  rd("initial_sigma_position_m", f.initial.position_m);
+  rd("initial_sigma_velocity_mps", f.initial.velocity_mps);
+  rd("initial_sigma_roll_pitch_rad", f.initial.roll_pitch_rad);
+  rd("initial_sigma_yaw_rad", f.initial.yaw_rad);
+  rd("initial_sigma_accel_bias_mps2", f.initial.accel_bias_mps2);
+  rd("initial_sigma_gyro_bias_radps", f.initial.gyro_bias_radps);
+  StaticInitParams& s = p.static_init;
+  rd("static_window_s", s.window_s);
+  rd("static_max_accel_std_mps2", s.max_accel_std_mps2);
+  rd("static_max_gyro_std_radps", s.max_gyro_std_radps);
+  s.gravity_mps2 = f.gravity_mps2;
+  NodeOptions& n = p.node;
+  rd("world_frame", n.world_frame);
+  rd("body_frame", n.body_frame);
+  rd("publish_tf", n.publish_tf);
+  rd("camera_time_offset_s", n.camera_time_offset_s);
+  rd("camera_calibration_file", n.camera_calibration_file);
+  rd("extrinsic_source", n.extrinsic_source);
+  rd("T_b_c", n.T_b_c);
+  rd("max_image_queue", n.max_image_queue);
+  rd("time_jump_reset_s", n.time_jump_reset_s);
+  rd("path_max_length", n.path_max_length);
+
+  err << fromReconfigure(c, &p);
+  if (n.world_frame.empty() || n.body_frame.empty()) err << "world_frame and body_frame must not be empty\n";
+  if (n.world_frame == n.body_frame) err << "world_frame and body_frame must differ\n";
+  if (!std::isfinite(n.camera_time_offset_s) || std::abs(n.camera_time_offset_s) > 1.0) {
+    err << "camera_time_offset_s must be within [-1, 1] s (got " << n.camera_time_offset_s << ")\n";
+  }
+  if (n.extrinsic_source != "tf" && n.extrinsic_source != "parameters") {
+    err << "extrinsic_source must be 'tf' or 'parameters' (got '" << n.extrinsic_source << "')\n";
+  }
+  if (n.T_b_c.size() != 7) {
+    err << "T_b_c must have 7 numbers: x y z qx qy qz qw (got " << n.T_b_c.size() << ")\n";
+  } else {
+    const double qn = std::sqrt(n.T_b_c[3] * n.T_b_c[3] + n.T_b_c[4] * n.T_b_c[4] + n.T_b_c[5] * n.T_b_c[5] +
+                                n.T_b_c[6] * n.T_b_c[6]);
+    if (!(std::abs(qn - 1.0) < 1e-3)) err << "T_b_c quaternion must have unit norm (got " << qn << ")\n";
+  }
+  if (n.max_image_queue < 1) err << "max_image_queue must be >= 1\n";
+  if (!(n.time_jump_reset_s > 0.0)) err << "time_jump_reset_s must be > 0 s\n";
+  if (n.path_max_length < 1) err << "path_max_length must be >= 1\n";
+  if (!(s.window_s > 0.05)) err << "static_window_s must be > 0.05 s\n";
+  if (!(s.max_accel_std_mps2 > 0.0) || !(s.max_gyro_std_radps > 0.0)) {
+    err << "static_max_accel_std_mps2 and static_max_gyro_std_radps must be > 0\n";
+  }
+  *out = p;
+  return err.str();
+}
+
+std::string describeParams(const NodeParams& p) {
+  std::ostringstream s;
+  const EkfSlamConfig& f = p.filter;
+  const TrackerParams& t = p.tracker;
+  const NodeOptions& n = p.node;
+  s << "vi_ekf_slam parameters:\n"
+    << "  frames: world_frame=" << n.world_frame << " body_frame=" << n.body_frame << " publish_tf=" << n.publish_tf << "\n"
+    << "  mechanization=" << toString(f.mechanization) << " composition_trigger=" << toString(f.composition_trigger)
+    << " composition_new_landmarks=" << f.composition_new_landmarks << "\n"
+    << "  landmark_init=" << toString(f.landmark_init) << " landmark_depth_m=" << f.landmark_depth_m
+    << " [m] landmark_depth_sigma_m=" << f.landmark_depth_sigma_m << " [m] inverse_depth_initial_m="
+    << f.inverse_depth_initial_m << " [m] inverse_depth_sigma=" << f.inverse_depth_sigma << " [1/m]\n"
+    << "  max_landmarks=" << f.max_landmarks << " landmark_timeout_s=" << f.landmark_timeout_s
+    << " [s] pixel_noise_px=" << f.update.pixel_noise_px << " [px] gate_probability=" << f.update.gate_probability << "\n"
+    << "  imu noise: accel " << f.imu_noise.accel_noise_density << " [m/s^2/sqrt(Hz)], gyro "
+    << f.imu_noise.gyro_noise_density << " [rad/s/sqrt(Hz)], accel walk " << f.imu_noise.accel_random_walk
+    << " [m/s^3/sqrt(Hz)], gyro walk " << f.imu_noise.gyro_random_walk << " [rad/s^2/sqrt(Hz)]\n"
+    << "  gravity_mps2=" << f.gravity_mps2 << " max_imu_gap_s=" << f.max_imu_gap_s << " [s]\n"
+    << "  initial sigmas: position " << f.initial.position_m << " [m], velocity " << f.initial.velocity_mps
+    << " [m/s], roll/pitch " << f.initial.roll_pitch_rad << " [rad], yaw " << f.initial.yaw_rad << " [rad], accel bias "
+    << f.initial.accel_bias_mps2 << " [m/s^2], gyro bias " << f.initial.gyro_bias_radps << " [rad/s]\n"
+    << "  static init: window " << p.static_init.window_s << " [s], accel std < " << p.static_init.max_accel_std_mps2
+    << " [m/s^2], gyro std < " << p.static_init.max_gyro_std_radps << " [rad/s]\n"
+    << "  tracker: detector=" << detectorName(t.detector) << " max_tracks=" << t.max_tracks << " min_distance_px="
+    << t.min_distance_px << " quality_level=" << t.quality_level << " fast_threshold=" << t.fast_threshold
+    << " klt_window_px=" << t.klt_window_px << " klt_pyramid_levels=" << t.klt_pyramid_levels
+    << " fb_threshold_px=" << t.fb_threshold_px << " ransac_threshold_px=" << t.ransac_threshold_px << "\n"
+    << "  camera: time_offset " << n.camera_time_offset_s << " [s], calibration_file='" << n.camera_calibration_file
+    << "', extrinsic_source=" << n.extrinsic_source << "\n"
+    << "  sync: max_image_queue=" << n.max_image_queue << " time_jump_reset_s=" << n.time_jump_reset_s
+    << " [s] path_max_length=" << n.path_max_length;
+  if (n.extrinsic_source == "parameters" && n.T_b_c.size() == 7) {
+    s << "\n  T_b_c (x y z qx qy qz qw) = ";
+    for (double v : n.T_b_c) s << v << " ";
+  }
+  return s.str();
+}
+
+}  // namespace vi_ekf_slam::glue
