@@ -101,12 +101,29 @@ bool EkfSlam::propagateTo(double t) {
       // Mean of the linearly interpolated measurements over [t0, t1] = value at its middle.
       const double alpha = (0.5 * (t0 + t1) - a.timestamp) / (b.timestamp - a.timestamp);
       integrate(t0, t1, (1.0 - alpha) * a.wm + alpha * b.wm, (1.0 - alpha) * a.am + alpha * b.am);
+      if (b.timestamp - a.timestamp > config_.max_imu_gap_s) addGapUncertainty(t1 - t0);
     }
     if (b.timestamp >= t) break;
   }
   state_.timestamp = t;
   while (imu_.size() > 1 && imu_[1].timestamp <= t) imu_.pop_front();
   return true;
+}
+
+void EkfSlam::addGapUncertainty(double dt) {
+  // An unknown constant acceleration a ~ N(0, sa^2 I) over dt moves v by a dt and p by a dt^2/2;
+  // an unknown rate turns the attitude by w dt.
+  using namespace idx;
+  const int m = state_.motionDim();
+  const double sa = config_.imu_gap_accel_sigma_mps2, sg = config_.imu_gap_gyro_sigma_radps;
+  MotionMatrix Q = MotionMatrix::Zero(m, m);
+  const double qa = sa * sa;
+  Q.block<3, 3>(kP, kP).diagonal().setConstant(qa * std::pow(dt, 4) / 4.0);
+  Q.block<3, 3>(kP, kV).diagonal().setConstant(qa * std::pow(dt, 3) / 2.0);
+  Q.block<3, 3>(kV, kP).diagonal().setConstant(qa * std::pow(dt, 3) / 2.0);
+  Q.block<3, 3>(kV, kV).diagonal().setConstant(qa * dt * dt);
+  Q.block<3, 3>(kPsi, kPsi).diagonal().setConstant(sg * sg * dt * dt);
+  state_.propagateCovariance(MotionMatrix::Identity(m, m), Q);
 }
 
 bool EkfSlam::initializeLandmark(const FeatureObservation& obs) {

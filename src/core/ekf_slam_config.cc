@@ -64,6 +64,8 @@ std::string EkfSlamConfig::validate() const {
   if (composition_new_landmarks < 0) err << "composition_new_landmarks must be >= 0\n";
   if (!std::isfinite(landmark_timeout_s)) err << "landmark_timeout_s must be finite (use < 0 for never)\n";
   requirePositive(err, "max_imu_gap_s [s]", max_imu_gap_s);
+  requireNonNegative(err, "imu_gap_accel_sigma_mps2 [m/s^2]", imu_gap_accel_sigma_mps2);
+  requireNonNegative(err, "imu_gap_gyro_sigma_radps [rad/s]", imu_gap_gyro_sigma_radps);
   if (imu_buffer_max < 10) err << "imu_buffer_max must be >= 10\n";
   requireNonNegative(err, "initial.position_m [m]", initial.position_m);
   requirePositive(err, "initial.velocity_mps [m/s]", initial.velocity_mps);

@@ -61,7 +61,9 @@ EkfSlamRos::EkfSlamRos(ros::NodeHandle nh, ros::NodeHandle pnh)
 
   imu_sub_ = nh_.subscribe("imu", 2000, &EkfSlamRos::imuCallback, this, ros::TransportHints().tcpNoDelay());
   info_sub_ = nh_.subscribe("camera_info", 5, &EkfSlamRos::cameraInfoCallback, this);
-  image_sub_ = it_.subscribe("image", 5, &EkfSlamRos::imageCallback, this, image_transport::TransportHints("raw", ros::TransportHints(), pnh_));
+  // Resolve (and remap) the base topic first: image_transport appends "/compressed" to the name it
+  // is given, and a remap of "image" would not reach "image/compressed" otherwise.
+  image_sub_ = it_.subscribe(nh_.resolveName("image"), 5, &EkfSlamRos::imageCallback, this, image_transport::TransportHints("raw", ros::TransportHints(), pnh_));
   diag_timer_ = nh_.createTimer(ros::Duration(0.25), &EkfSlamRos::diagnosticsTimer, this);
   ROS_INFO("vi_ekf_slam: waiting for imu, image (%s transport) and camera_info", image_sub_.getTransport().c_str());
 }

@@ -149,3 +149,28 @@ TEST(EkfSlam, SwitchingMechanizationWhileRunningKeepsPoseAndMap) {
                      });
   EXPECT_EQ(switches, 3);
 }
+
+TEST(EkfSlam, AnImuGapAddsTheMotionItMissedAsUncertainty) {
+  EkfSlamConfig cfg;
+  cfg.mechanization = Mechanization::kWorldCentric;
+  cfg.imu_gap_accel_sigma_mps2 = 3.0;
+  cfg.imu_gap_gyro_sigma_radps = 0.0;  // the attitude term would also feed the velocity through gravity
+  EkfSlam with_gap(cfg, sim::paperCamera(), sim::torsoCameraExtrinsics());
+  EkfSlam without(cfg, sim::paperCamera(), sim::torsoCameraExtrinsics());
+  with_gap.initialize(NavState());
+  without.initialize(NavState());
+  ImuData d;
+  d.am = Vec3(0, 0, -9.81);
+  for (int k = 0; k <= 200; ++k) {
+    d.timestamp = 0.005 * k;
+    without.addImu(d);
+    if (d.timestamp < 0.3 || d.timestamp > 0.8) with_gap.addImu(d);  // 0.5 s without IMU
+  }
+  ASSERT_TRUE(with_gap.propagateTo(1.0));
+  ASSERT_TRUE(without.propagateTo(1.0));
+  EXPECT_EQ(with_gap.imuGaps(), 1);
+  const double extra = with_gap.navState().cov(idx::kV, idx::kV) - without.navState().cov(idx::kV, idx::kV);
+  // The gap runs from the sample at 0.295 s to the one at 0.805 s: (3 m/s^2 * 0.51 s)^2.
+  EXPECT_NEAR(extra, std::pow(3.0 * 0.51, 2), 1e-6);
+  EXPECT_LT((with_gap.navState().p_n_b - without.navState().p_n_b).norm(), 1e-9);  // same mean
+}

@@ -74,6 +74,7 @@ class EkfSlam {
   void removeLandmarksById(const std::vector<std::int64_t>& ids);
   bool initializeLandmark(const FeatureObservation& obs);
   bool shouldCompose(int new_landmarks) const;
+  void addGapUncertainty(double dt);
 
   EkfSlamConfig config_;
   CameraModel camera_;

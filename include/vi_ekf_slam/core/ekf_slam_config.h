@@ -56,7 +56,11 @@ struct EkfSlamConfig {
   double inverse_depth_sigma = 0.3;     ///< inverse depth: prior std-dev of rho [1/m]
   int max_landmarks = 300;              ///< map size bound
   double landmark_timeout_s = 2.0;      ///< drop landmarks not observed for this long [s]; <0: never
-  double max_imu_gap_s = 0.1;           ///< IMU intervals longer than this are reported [s]
+  double max_imu_gap_s = 0.1;           ///< IMU intervals longer than this are gaps [s]
+  /// Over a gap the IMU is interpolated, and the motion it missed enters as uncertainty: an
+  /// unknown acceleration and angular rate with these std-devs (a walking torso: ~3 m/s^2, 0.3 rad/s).
+  double imu_gap_accel_sigma_mps2 = 3.0;
+  double imu_gap_gyro_sigma_radps = 0.3;
   int imu_buffer_max = 4000;            ///< bound on buffered IMU samples
   InitialUncertainty initial;
 
