@@ -9,6 +9,7 @@
 #include <sstream>
 
 #include "vi_ekf_slam/core/frames.h"
+#include "vi_ekf_slam/ros/ekf_slam_processor.h"
 
 namespace vi_ekf_slam::glue {
 
@@ -159,33 +160,41 @@ geometry_msgs::TransformStamped toTransform(const NavState& nav, const ros::Time
   return t;
 }
 
-sensor_msgs::PointCloud2 toPointCloud(const std::vector<NavLandmark>& lms, const ros::Time& stamp,
+sensor_msgs::PointCloud2 toPointCloud(const std::vector<LandmarkOutput>& lms, const ros::Time& stamp,
                                       const std::string& world_frame) {
   sensor_msgs::PointCloud2 c;
   c.header.stamp = stamp;
   c.header.frame_id = world_frame;
   c.height = 1;
   sensor_msgs::PointCloud2Modifier mod(c);
-  mod.setPointCloud2Fields(5, "x", 1, sensor_msgs::PointField::FLOAT32, "y", 1, sensor_msgs::PointField::FLOAT32, "z",
+  mod.setPointCloud2Fields(8, "x", 1, sensor_msgs::PointField::FLOAT32, "y", 1, sensor_msgs::PointField::FLOAT32, "z",
                            1, sensor_msgs::PointField::FLOAT32, "id", 1, sensor_msgs::PointField::UINT32, "sigma", 1,
+                           sensor_msgs::PointField::FLOAT32, "birth_time", 1, sensor_msgs::PointField::FLOAT64,
+                           "birth_u", 1, sensor_msgs::PointField::FLOAT32, "birth_v", 1,
                            sensor_msgs::PointField::FLOAT32);
-  std::vector<const NavLandmark*> finite;
+  std::vector<const LandmarkOutput*> finite;
   for (const auto& l : lms) {
-    if (l.p_n_l.allFinite() && l.cov.allFinite()) finite.push_back(&l);
+    if (l.landmark.p_n_l.allFinite() && l.landmark.cov.allFinite()) finite.push_back(&l);
   }
   mod.resize(finite.size());
-  sensor_msgs::PointCloud2Iterator<float> x(c, "x"), y(c, "y"), z(c, "z"), sigma(c, "sigma");
+  sensor_msgs::PointCloud2Iterator<float> x(c, "x"), y(c, "y"), z(c, "z"), sigma(c, "sigma"), u(c, "birth_u"),
+      v(c, "birth_v");
   sensor_msgs::PointCloud2Iterator<uint32_t> id(c, "id");
+  sensor_msgs::PointCloud2Iterator<double> bt(c, "birth_time");
   const Quat q_w_n = zUpWorldFromNav();
-  for (const NavLandmark* l : finite) {
-    const Vec3 p = q_w_n * l->p_n_l;
+  for (const LandmarkOutput* lo : finite) {
+    const NavLandmark& l = lo->landmark;
+    const Vec3 p = q_w_n * l.p_n_l;
     *x = static_cast<float>(p.x());
     *y = static_cast<float>(p.y());
     *z = static_cast<float>(p.z());
-    *id = static_cast<uint32_t>(l->id);
-    const double lmax = Eigen::SelfAdjointEigenSolver<Mat3>(l->cov, Eigen::EigenvaluesOnly).eigenvalues().maxCoeff();
+    *id = static_cast<uint32_t>(l.id);
+    const double lmax = Eigen::SelfAdjointEigenSolver<Mat3>(l.cov, Eigen::EigenvaluesOnly).eigenvalues().maxCoeff();
     *sigma = static_cast<float>(std::sqrt(std::max(0.0, lmax)));
-    ++x, ++y, ++z, ++id, ++sigma;
+    *bt = lo->birth_time;
+    *u = static_cast<float>(lo->birth_uv.x());
+    *v = static_cast<float>(lo->birth_uv.y());
+    ++x, ++y, ++z, ++id, ++sigma, ++bt, ++u, ++v;
   }
   return c;
 }

@@ -1,7 +1,9 @@
 #include "vi_ekf_slam/ros/params.h"
 
 #include <cmath>
+#include <fstream>
 #include <sstream>
+#include <stdexcept>
 
 namespace vi_ekf_slam::glue {
 
@@ -14,33 +16,40 @@ std::optional<CompositionTrigger> triggerFromString(const std::string& s) {
   return std::nullopt;
 }
 
-/// Reads ~name into value when set; a value of the wrong type is an error, not a silent default.
+/// Reads a parameter into value when set; a value of the wrong type is an error, not a silent
+/// default.
 class ParamReader {
  public:
-  ParamReader(const ros::NodeHandle& nh, std::ostringstream& err) : nh_(nh), err_(err) {}
+  ParamReader(const ParamSource& src, std::ostringstream& err) : src_(src), err_(err) {}
   template <typename T>
   void operator()(const std::string& name, T& value) {
-    if (!nh_.hasParam(name)) return;
+    if (!src_.has(name)) return;
     T v;
-    if (nh_.getParam(name, v)) {
-      value = v;
-      return;
-    }
-    err_ << name << " has the wrong type\n";
-  }
-  void operator()(const std::string& name, double& value) {
-    if (!nh_.hasParam(name)) return;
-    double d;
-    int i;
-    if (nh_.getParam(name, d)) value = d;
-    else if (nh_.getParam(name, i)) value = i;  // an integer literal is a fine double
-    else err_ << name << " must be a number\n";
+    if (src_.get(name, v)) value = v;
+    else err_ << name << " has the wrong type\n";
   }
 
  private:
-  const ros::NodeHandle& nh_;
+  const ParamSource& src_;
   std::ostringstream& err_;
 };
+
+std::string trim(const std::string& s) {
+  const auto a = s.find_first_not_of(" \t\r");
+  if (a == std::string::npos) return "";
+  const auto b = s.find_last_not_of(" \t\r");
+  return s.substr(a, b - a + 1);
+}
+
+bool parseDouble(const std::string& s, double& v) {
+  try {
+    size_t used = 0;
+    v = std::stod(s, &used);
+    return used == s.size();
+  } catch (const std::logic_error&) {
+    return false;
+  }
+}
 
 std::string detectorName(TrackerParams::Detector d) {
   return d == TrackerParams::Detector::kFast ? "fast" : "shi_tomasi";
@@ -86,6 +95,73 @@ std::string fromReconfigure(const EkfSlamReconfigureConfig& c, NodeParams* p) {
 
 }  // namespace
 
+bool NodeHandleParams::get(const std::string& name, double& v) const {
+  if (nh_.getParam(name, v)) return true;
+  int i;
+  if (!nh_.getParam(name, i)) return false;
+  v = i;  // an integer literal is a fine double
+  return true;
+}
+
+YamlParams::YamlParams(const std::string& path) {
+  std::ifstream in(path);
+  if (!in) throw std::runtime_error("cannot open parameter file '" + path + "'");
+  std::string line;
+  int n = 0;
+  while (std::getline(in, line)) {
+    ++n;
+    // Drop comments (not inside quotes: our files have no '#' in strings).
+    const auto hash = line.find('#');
+    if (hash != std::string::npos) line = line.substr(0, hash);
+    line = trim(line);
+    if (line.empty()) continue;
+    const auto colon = line.find(':');
+    if (colon == std::string::npos || colon == 0) {
+      throw std::runtime_error(path + ":" + std::to_string(n) + ": expected `name: value`");
+    }
+    values_[trim(line.substr(0, colon))] = trim(line.substr(colon + 1));
+  }
+}
+
+bool YamlParams::get(const std::string& name, double& v) const { return parseDouble(values_.at(name), v); }
+
+bool YamlParams::get(const std::string& name, int& v) const {
+  double d;
+  if (!parseDouble(values_.at(name), d) || d != std::floor(d)) return false;
+  v = static_cast<int>(d);
+  return true;
+}
+
+bool YamlParams::get(const std::string& name, bool& v) const {
+  const std::string& s = values_.at(name);
+  if (s == "true" || s == "True") v = true;
+  else if (s == "false" || s == "False") v = false;
+  else return false;
+  return true;
+}
+
+bool YamlParams::get(const std::string& name, std::string& v) const {
+  std::string s = values_.at(name);
+  if (s.size() >= 2 && (s.front() == '"' || s.front() == '\'') && s.back() == s.front()) s = s.substr(1, s.size() - 2);
+  v = s;
+  return true;
+}
+
+bool YamlParams::get(const std::string& name, std::vector<double>& v) const {
+  const std::string& s = values_.at(name);
+  if (s.size() < 2 || s.front() != '[' || s.back() != ']') return false;
+  std::stringstream ss(s.substr(1, s.size() - 2));
+  std::string item;
+  std::vector<double> out;
+  while (std::getline(ss, item, ',')) {
+    double d;
+    if (!parseDouble(trim(item), d)) return false;
+    out.push_back(d);
+  }
+  v = out;
+  return true;
+}
+
 EkfSlamReconfigureConfig toReconfigure(const NodeParams& p) {
   EkfSlamReconfigureConfig c = EkfSlamReconfigureConfig::__getDefault__();
   const EkfSlamConfig& f = p.filter;
@@ -125,10 +201,10 @@ std::string applyReconfigure(const EkfSlamReconfigureConfig& c, NodeParams* p) {
   return err;
 }
 
-std::string loadParams(const ros::NodeHandle& pnh, NodeParams* out) {
+std::string loadParams(const ParamSource& source, NodeParams* out) {
   NodeParams p;
   std::ostringstream err;
-  ParamReader rd(pnh, err);
+  ParamReader rd(source, err);
   // Shared with dynamic_reconfigure: start from its defaults, overwrite with ~params.
   EkfSlamReconfigureConfig c = toReconfigure(p);
   rd("mechanization", c.mechanization);

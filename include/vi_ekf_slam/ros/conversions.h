@@ -42,9 +42,11 @@ nav_msgs::Odometry toOdometry(const NavState& nav, const Eigen::Vector3d& w_b, d
 geometry_msgs::TransformStamped toTransform(const NavState& nav, const ros::Time& stamp,
                                             const std::string& world_frame, const std::string& body_frame);
 
-/// Landmarks in the world frame as a cloud with fields x y z (float32), id (uint32) and sigma
-/// (float32, square root of the largest eigenvalue of the 3x3 covariance [m]).
-sensor_msgs::PointCloud2 toPointCloud(const std::vector<NavLandmark>& landmarks, const ros::Time& stamp,
+/// Landmarks in the world frame as a cloud with fields x y z (float32), id (uint32), sigma
+/// (float32, square root of the largest eigenvalue of the 3x3 covariance [m]), and where the
+/// landmark's track started: birth_time (float64 [s]), birth_u, birth_v (float32 [px]).
+struct LandmarkOutput;
+sensor_msgs::PointCloud2 toPointCloud(const std::vector<LandmarkOutput>& landmarks, const ros::Time& stamp,
                                       const std::string& world_frame);
 
 /// True if every number of the pose, twist and covariances is finite.

@@ -3,6 +3,7 @@
 #pragma once
 
 #include <ros/node_handle.h>
+#include <map>
 #include <string>
 #include <vector>
 
@@ -33,9 +34,54 @@ struct NodeParams {
   NodeOptions node;
 };
 
-/// Reads every parameter from pnh (defaults where unset). Returns the problems, one per line,
-/// or an empty string.
-std::string loadParams(const ros::NodeHandle& pnh, NodeParams* out);
+/// Where parameters come from: the parameter server (the node) or a YAML file (offline tools).
+/// get() returns false when the parameter exists but has another type.
+class ParamSource {
+ public:
+  virtual ~ParamSource() = default;
+  virtual bool has(const std::string& name) const = 0;
+  virtual bool get(const std::string& name, double& v) const = 0;
+  virtual bool get(const std::string& name, int& v) const = 0;
+  virtual bool get(const std::string& name, bool& v) const = 0;
+  virtual bool get(const std::string& name, std::string& v) const = 0;
+  virtual bool get(const std::string& name, std::vector<double>& v) const = 0;
+};
+
+/// The private namespace of a node.
+class NodeHandleParams : public ParamSource {
+ public:
+  explicit NodeHandleParams(const ros::NodeHandle& nh) : nh_(nh) {}
+  bool has(const std::string& name) const override { return nh_.hasParam(name); }
+  bool get(const std::string& name, double& v) const override;
+  bool get(const std::string& name, int& v) const override { return nh_.getParam(name, v); }
+  bool get(const std::string& name, bool& v) const override { return nh_.getParam(name, v); }
+  bool get(const std::string& name, std::string& v) const override { return nh_.getParam(name, v); }
+  bool get(const std::string& name, std::vector<double>& v) const override { return nh_.getParam(name, v); }
+
+ private:
+  ros::NodeHandle nh_;
+};
+
+/// A flat YAML parameter file as written in config/ (`key: value`, `[a, b]` lists, comments).
+/// Throws std::runtime_error naming the file and line when it cannot be read.
+class YamlParams : public ParamSource {
+ public:
+  explicit YamlParams(const std::string& path);
+  void set(const std::string& name, const std::string& value) { values_[name] = value; }
+  bool has(const std::string& name) const override { return values_.count(name) > 0; }
+  bool get(const std::string& name, double& v) const override;
+  bool get(const std::string& name, int& v) const override;
+  bool get(const std::string& name, bool& v) const override;
+  bool get(const std::string& name, std::string& v) const override;
+  bool get(const std::string& name, std::vector<double>& v) const override;
+
+ private:
+  std::map<std::string, std::string> values_;
+};
+
+/// Reads every parameter (defaults where unset). Returns the problems, one per line, or an
+/// empty string.
+std::string loadParams(const ParamSource& source, NodeParams* out);
 /// Human-readable list of every effective value with its unit.
 std::string describeParams(const NodeParams& p);
 /// Applies a dynamic_reconfigure update; returns the problems or an empty string.

@@ -1,0 +1,117 @@
+// The ROS glue's logic at the message level: synchronizes IMU, images and camera_info, handles
+// every kind of bad input, runs the front end and the filter of the core, and hands the results
+// to an OutputSink. It owns no NodeHandle, so the live node (EkfSlamRos) and the offline bag
+// runner (tools/run_bag) drive the very same code.
+#pragma once
+
+#include <deque>
+#include <memory>
+#include <optional>
+#include <sensor_msgs/CameraInfo.h>
+#include <sensor_msgs/Image.h>
+#include <sensor_msgs/Imu.h>
+#include <string>
+#include <tf2/buffer_core.h>
+#include <unordered_map>
+#include <vector>
+
+#include "vi_ekf_slam/FilterStatus.h"
+#include "vi_ekf_slam/core/ekf_slam.h"
+#include "vi_ekf_slam/core/feature_tracker.h"
+#include "vi_ekf_slam/core/static_initializer.h"
+#include "vi_ekf_slam/ros/params.h"
+#include <nav_msgs/Odometry.h>
+
+namespace vi_ekf_slam::glue {
+
+/// Counters shown in the diagnostics (and used by the tests).
+struct InputCounters {
+  long imu_received = 0, imu_nonfinite = 0, imu_stale = 0, imu_gaps = 0;
+  long images_received = 0, images_processed = 0, images_bad_encoding = 0, images_stale = 0;
+  long images_late = 0, images_before_init = 0, images_no_camera = 0, images_queue_dropped = 0;
+  long camera_info_invalid = 0, rejected_observations = 0, resets = 0;
+};
+
+/// A landmark as published: its estimate and where its track started (time, pixel), which lets
+/// an evaluation find its true position in a simulated world.
+struct LandmarkOutput {
+  NavLandmark landmark;
+  double birth_time = 0.0;
+  Eigen::Vector2d birth_uv = Eigen::Vector2d::Zero();
+};
+
+/// Where the results go: publishers in the node, files in the offline runner.
+class OutputSink {
+ public:
+  virtual ~OutputSink() = default;
+  virtual void odometry(const nav_msgs::Odometry& odom) = 0;
+  virtual bool wantsLandmarks() const { return true; }
+  virtual void landmarks(const std::vector<LandmarkOutput>& landmarks, const ros::Time& stamp) = 0;
+  virtual bool wantsTracksImage() const { return false; }
+  virtual void tracksImage(const std_msgs::Header& /*header*/, const cv::Mat& /*bgr*/) {}
+  virtual void status(const vi_ekf_slam::FilterStatus& status) = 0;
+  virtual void event(const std::string& text) = 0;
+};
+
+class EkfSlamProcessor {
+ public:
+  /// tf may be null when params.node.extrinsic_source is "parameters". Throws
+  /// std::invalid_argument if the camera calibration file cannot be used.
+  EkfSlamProcessor(const NodeParams& params, OutputSink& sink, const tf2::BufferCore* tf);
+
+  void imu(const sensor_msgs::Imu& msg);
+  void image(const sensor_msgs::Image& msg);
+  void cameraInfo(const sensor_msgs::CameraInfo& msg);
+  /// Forgets state, map, tracks and queue; re-initializes at the next static interval.
+  void reset(const std::string& reason);
+  /// Applies a dynamic_reconfigure update; returns the problems or an empty string.
+  std::string reconfigure(const EkfSlamReconfigureConfig& config);
+
+  const NodeParams& params() const { return params_; }
+  const InputCounters& counters() const { return counters_; }
+  const std::string& lastProblem() const { return last_problem_; }
+  const EkfSlam* filter() const { return filter_.get(); }
+  int lastTracks() const { return last_tracks_; }
+  double lastUpdateMs() const { return last_update_ms_; }
+  /// Sum of the wall time spent processing images [ms] (for real-time factors).
+  double totalProcessingMs() const { return total_processing_ms_; }
+
+ private:
+  struct PendingImage {
+    double t;
+    ros::Time stamp;
+    cv::Mat mono;
+  };
+  struct Birth {
+    double t;
+    Eigen::Vector2d uv;
+  };
+
+  bool cameraReady(const std::string& image_frame);
+  void tryInitialize(double t_now);
+  void processQueue();
+  void processImage(const PendingImage& img);
+  void output(const PendingImage& img, const CameraFrame& frame, const FrameResult& r);
+  void reportProblem(const std::string& what);
+
+  NodeParams params_;
+  OutputSink& sink_;
+  const tf2::BufferCore* tf_;
+  std::optional<CameraIntrinsics> intrinsics_;
+  std::optional<CameraExtrinsics> extrinsics_;
+  std::unique_ptr<EkfSlam> filter_;
+  std::unique_ptr<FeatureTracker> tracker_;
+  StaticInitializer static_init_;
+  std::optional<StaticInitResult> static_result_;
+  std::deque<PendingImage> queue_;
+  std::unordered_map<std::int64_t, Birth> births_;
+  double last_imu_t_ = -1e300, last_image_t_ = -1e300;
+  Vec3 last_gyro_ = Vec3::Zero();
+  std::optional<Quat> prev_q_n_b_;
+  InputCounters counters_;
+  int last_tracks_ = 0;
+  double last_update_ms_ = 0.0, total_processing_ms_ = 0.0;
+  std::string last_problem_;
+};
+
+}  // namespace vi_ekf_slam::glue
