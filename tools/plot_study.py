@@ -73,7 +73,11 @@ def plot_config(out, cfg, world):
     ax.plot(d["ey"], d["ex"], color="green", lw=1.5, label="estimated trajectory")
     ax.set_xlabel("y [m] (right)")
     ax.set_ylabel("x [m] (forward)")
-    ax.set_aspect("equal", adjustable="datalim")
+    # Frame the true world: unconverged inverse-depth points far away would shrink it to a dot.
+    m = 3.0
+    ax.set_xlim(np.nanmin(world["y"]) - m, np.nanmax(world["y"]) + m)
+    ax.set_ylim(np.nanmin(world["x"]) - m, np.nanmax(world["x"]) + m)
+    ax.set_aspect("equal", adjustable="box")
     ax.legend(fontsize=8, loc="best")
     ax.set_title(f"{cfg}: top view")
     fig.tight_layout()

@@ -1,6 +1,8 @@
 #include "vi_ekf_slam/sim/hallway.h"
 
 #include <cmath>
+#include <sstream>
+#include <stdexcept>
 
 namespace vi_ekf_slam::sim {
 
@@ -136,6 +138,69 @@ std::shared_ptr<BsplineTrajectory> pedestrianWalk(const HallwayParams& p) {
     poses.push_back(sp);
   }
   return std::make_shared<BsplineTrajectory>(poses, 0.02);
+}
+
+std::vector<Quad> roomAroundTrajectory(const Trajectory& traj, double margin, double below, double above) {
+  Vec3 lo = Vec3::Constant(1e18), hi = Vec3::Constant(-1e18);
+  for (double t = traj.startTime(); t <= traj.endTime(); t += 0.05) {
+    const Vec3 p = traj.sample(t).p_n_b;
+    lo = lo.cwiseMin(p);
+    hi = hi.cwiseMax(p);
+  }
+  const double x0 = lo.x() - margin, x1 = hi.x() + margin, y0 = lo.y() - margin, y1 = hi.y() + margin;
+  const double floor_z = hi.z() + below, ceil_z = lo.z() - above, h = floor_z - ceil_z;  // z is down
+  const Vec3 X = Vec3::UnitX(), Y = Vec3::UnitY(), Z = Vec3::UnitZ();
+  return {quad({x0, y0, floor_z}, X, x1 - x0, -Z, h, "wall"),  // y = y0, faces +y
+          quad({x0, y1, ceil_z}, X, x1 - x0, Z, h, "wall"),    // y = y1, faces -y
+          quad({x0, y0, ceil_z}, Y, y1 - y0, Z, h, "wall"),    // x = x0, faces +x
+          quad({x1, y0, floor_z}, Y, y1 - y0, -Z, h, "wall"),  // x = x1, faces -x
+          quad({x0, y0, floor_z}, Y, y1 - y0, X, x1 - x0, "floor"),
+          quad({x0, y0, ceil_z}, X, x1 - x0, Y, y1 - y0, "ceiling")};
+}
+
+std::string serializeQuads(const std::vector<Quad>& quads) {
+  std::ostringstream s;
+  s.precision(10);
+  for (const auto& q : quads) {
+    s << q.kind << " " << q.origin.x() << " " << q.origin.y() << " " << q.origin.z() << " " << q.u.x() << " " << q.u.y()
+      << " " << q.u.z() << " " << q.v.x() << " " << q.v.y() << " " << q.v.z() << " " << q.u_len << " " << q.v_len << "\n";
+  }
+  return s.str();
+}
+
+std::vector<Quad> parseQuads(const std::string& text) {
+  std::vector<Quad> out;
+  std::istringstream in(text);
+  std::string line;
+  while (std::getline(in, line)) {
+    if (line.empty()) continue;
+    std::istringstream l(line);
+    Quad q;
+    if (!(l >> q.kind >> q.origin.x() >> q.origin.y() >> q.origin.z() >> q.u.x() >> q.u.y() >> q.u.z() >> q.v.x() >>
+          q.v.y() >> q.v.z() >> q.u_len >> q.v_len)) {
+      throw std::runtime_error("parseQuads: bad line '" + line + "'");
+    }
+    out.push_back(q);
+  }
+  return out;
+}
+
+std::optional<Vec3> raycast(const std::vector<Quad>& quads, const Vec3& o, const Vec3& d) {
+  double best = 1e18;
+  std::optional<Vec3> hit;
+  for (const auto& q : quads) {
+    const Vec3 n = q.normal();
+    const double denom = n.dot(d);
+    if (denom > -1e-9) continue;
+    const double t = n.dot(q.origin - o) / denom;
+    if (t <= 1e-6 || t >= best) continue;
+    const Vec3 h = o + t * d - q.origin;
+    const double a = h.dot(q.u), b = h.dot(q.v);
+    if (a < 0 || b < 0 || a > q.u_len || b > q.v_len) continue;
+    best = t;
+    hit = o + t * d;
+  }
+  return hit;
 }
 
 LandmarkWorld landmarksOnQuads(const std::vector<Quad>& quads, double density, std::mt19937_64& rng,

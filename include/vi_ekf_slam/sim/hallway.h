@@ -4,6 +4,7 @@
 #pragma once
 
 #include <memory>
+#include <optional>
 #include <random>
 #include <string>
 #include <vector>
@@ -58,6 +59,18 @@ HallwayLayout hallwayLayout(const HallwayParams& p);
 std::vector<Quad> hallwayGeometry(const HallwayParams& p);
 /// The walk as a C2 trajectory, t in [0, duration_s].
 std::shared_ptr<BsplineTrajectory> pedestrianWalk(const HallwayParams& p);
+
+/// A closed box room around a trajectory ({n}): its horizontal extent plus `margin_m`, the floor
+/// `below_m` under and the ceiling `above_m` over the lowest/highest point of the path.
+std::vector<Quad> roomAroundTrajectory(const Trajectory& trajectory, double margin_m, double below_m, double above_m);
+
+/// Quads as text (one per line: kind ox oy oz ux uy uz vx vy vz u_len v_len), e.g. to store the
+/// simulated world in a bag, and back. parseQuads throws std::runtime_error on bad input.
+std::string serializeQuads(const std::vector<Quad>& quads);
+std::vector<Quad> parseQuads(const std::string& text);
+
+/// Where the ray from `origin` along `dir` ({n}) first hits a quad facing it; nullopt if none.
+std::optional<Vec3> raycast(const std::vector<Quad>& quads, const Vec3& origin, const Vec3& dir);
 
 /// Landmarks uniformly on the quads with `density_per_m2`, ids from `first_id`.
 LandmarkWorld landmarksOnQuads(const std::vector<Quad>& quads, double density_per_m2, std::mt19937_64& rng,
