@@ -1,0 +1,58 @@
+// Readers for the real datasets in ../shared/data (ROS-free): the EuRoC/ASL folder layout and
+// the EqVIO feature-track CSV. Every reader throws std::runtime_error naming the file and
+// line when the data is malformed.
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include "vi_ekf_slam/core/camera_model.h"
+#include "vi_ekf_slam/core/imu_propagation.h"
+#include "vi_ekf_slam/core/measurement_model.h"
+#include "vi_ekf_slam/core/types.h"
+#include "vi_ekf_slam/eval/tum_io.h"
+
+namespace vi_ekf_slam::eval {
+
+/// An ASL sensor.yaml: intrinsics, radial-tangential distortion, T_BS (sensor in body).
+struct AslCamera {
+  CameraIntrinsics intrinsics;
+  CameraExtrinsics T_b_c;
+  double rate_hz = 0.0;
+};
+AslCamera readAslCamera(const std::string& sensor_yaml);
+/// Noise densities of an ASL imu0/sensor.yaml.
+ImuNoiseParams readAslImuNoise(const std::string& sensor_yaml);
+
+struct AslImage {
+  double t = 0.0;
+  std::string path;
+};
+std::vector<AslImage> readAslImages(const std::string& cam_folder);  ///< data.csv + data/
+std::vector<ImuData> readAslImu(const std::string& imu_csv);          ///< imu0/data.csv
+
+/// Ground truth (state_groundtruth_estimate0/data.csv): body pose in the z-up world, velocity,
+/// biases.
+struct AslState {
+  double t = 0.0;
+  Vec3 p = Vec3::Zero(), v = Vec3::Zero();
+  Quat q = Quat::Identity();
+  Vec3 b_g = Vec3::Zero(), b_a = Vec3::Zero();
+};
+std::vector<AslState> readAslGroundTruth(const std::string& csv);
+std::vector<StampedPose> toStampedPoses(const std::vector<AslState>& states);
+
+/// Trajectory file in either TUM or ASL ground-truth format (detected from the content).
+std::vector<StampedPose> readTrajectoryFile(const std::string& path);
+
+/// The EqVIO CSV (see ../shared/data/euroc_v1_01_features/README.md): IMU rows, per-frame
+/// feature tracks in normalized image coordinates, and the camera in the meta rows.
+struct FeatureTrackData {
+  std::vector<ImuData> imu;
+  std::vector<CameraFrame> frames;  ///< uv in pixels of `camera` (an undistorted pinhole)
+  CameraIntrinsics camera;
+  CameraExtrinsics T_b_c;
+};
+FeatureTrackData readEqvioCsv(const std::string& path, int width = 752, int height = 480);
+
+}  // namespace vi_ekf_slam::eval

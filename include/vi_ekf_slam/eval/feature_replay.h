@@ -1,0 +1,29 @@
+// Feeds recorded IMU + feature tracks (e.g. the EqVIO CSV of EuRoC V1_01) to the core directly,
+// without image processing: static initialization, then IMU samples and feature frames in time
+// order. Evaluated against ground truth with the single-run metrics.
+#pragma once
+
+#include "vi_ekf_slam/core/ekf_slam_config.h"
+#include "vi_ekf_slam/core/navigation_output.h"
+#include "vi_ekf_slam/core/static_initializer.h"
+#include "vi_ekf_slam/eval/datasets.h"
+#include "vi_ekf_slam/eval/run_evaluation.h"
+
+namespace vi_ekf_slam::eval {
+
+/// The estimated body pose and its covariance in the z-up world frame (from {n}).
+EstimatedPose worldPoseFromNav(const NavState& nav);
+
+struct FeatureReplayResult {
+  RunMetrics metrics;
+  std::vector<EstimatedPose> trajectory;
+  int frames_processed = 0;
+  int rejected_observations = 0;
+  double init_time = 0.0;  ///< when the static initialization finished [s]
+};
+
+/// Throws std::runtime_error if the data never shows a static interval.
+FeatureReplayResult replayFeatures(const FeatureTrackData& data, const std::vector<StampedPose>& truth,
+                                   const EkfSlamConfig& config, const StaticInitParams& static_init);
+
+}  // namespace vi_ekf_slam::eval

@@ -1,0 +1,65 @@
+#include <gtest/gtest.h>
+
+#include <cstdlib>
+#include <fstream>
+
+#include "vi_ekf_slam/eval/feature_replay.h"
+
+using namespace vi_ekf_slam;
+
+// Real IMU + real EqVIO feature tracks of EuRoC V1_01 (first 30 s, take-off and flight, 8.2 m)
+// through the best configuration (sensor-centric, composition after every update, inverse
+// depth). Measured: ATE 0.058 m, final error 0.070 m. The bounds (0.08 m, 0.12 m) leave ~40%
+// for numerical differences between machines and compilers while still failing for the paper's
+// setup on the same data (ATE 0.086-0.089 m, see tools/run_features) and for any real regression.
+TEST(RealFeatures, BestConfigurationFollowsTheEurocGroundTruth) {
+  const char* dir = std::getenv("DATA_DIR");
+  if (!dir) GTEST_SKIP() << "DATA_DIR not set";
+  const std::string csv = std::string(dir) + "/euroc_v1_01_features/eqvio_processed_30s.csv";
+  const std::string gt = std::string(dir) + "/euroc_v1_01_micro/mav0/state_groundtruth_estimate0/data.csv";
+  if (!std::ifstream(csv) || !std::ifstream(gt)) GTEST_SKIP() << "real data not found in " << dir;
+  const eval::FeatureTrackData data = eval::readEqvioCsv(csv);
+  ASSERT_EQ(data.frames.size(), 601u);
+  EkfSlamConfig c;  // defaults: sensor_centric_composition, every update, inverse depth
+  c.imu_noise.gyro_noise_density = 2.5e-4;
+  c.imu_noise.accel_noise_density = 1.0e-2;
+  c.imu_noise.gyro_random_walk = 2.0e-5;
+  c.imu_noise.accel_random_walk = 3.0e-3;
+  c.update.pixel_noise_px = 2.0;
+  c.landmark_timeout_s = 0.1;
+  c.max_landmarks = 100;
+  c.initial.position_m = 0.0;
+  c.initial.yaw_rad = 0.0;
+  c.initial.roll_pitch_rad = 0.01;
+  const auto r = eval::replayFeatures(data, eval::toStampedPoses(eval::readAslGroundTruth(gt)), c, StaticInitParams());
+  EXPECT_GT(r.frames_processed, 500);
+  EXPECT_GT(r.rejected_observations, 0);  // the take-off mismatches must be gated out
+  EXPECT_GT(r.metrics.distance_m, 7.0);
+  EXPECT_LT(r.metrics.ate_position_m, 0.08);
+  EXPECT_LT(r.metrics.final_position_error_m, 0.12);
+  RecordProperty("ate_mm", static_cast<int>(1000 * r.metrics.ate_position_m));
+}
+
+TEST(Datasets, ReadersRejectMalformedFiles) {
+  const std::string path = ::testing::TempDir() + "bad_imu.csv";
+  std::ofstream(path) << "#timestamp,wx,wy,wz,ax,ay,az\n1,0,0,0,0,0\n";
+  EXPECT_THROW(eval::readAslImu(path), std::runtime_error);
+  std::ofstream(path) << "1,0,0,x,0,0,9.8\n";
+  EXPECT_THROW(eval::readAslImu(path), std::runtime_error);
+  EXPECT_THROW(eval::readAslCamera("/nonexistent/sensor.yaml"), std::runtime_error);
+}
+
+TEST(Datasets, EurocCameraAndImuNoise) {
+  const char* dir = std::getenv("DATA_DIR");
+  if (!dir) GTEST_SKIP() << "DATA_DIR not set";
+  const std::string base = std::string(dir) + "/euroc_v1_01_micro/mav0/";
+  if (!std::ifstream(base + "cam0/sensor.yaml")) GTEST_SKIP();
+  const eval::AslCamera cam = eval::readAslCamera(base + "cam0/sensor.yaml");
+  EXPECT_EQ(cam.intrinsics.width, 752);
+  EXPECT_NEAR(cam.intrinsics.fx, 458.654, 1e-9);
+  EXPECT_NEAR(cam.T_b_c.p_b_c.x(), -0.0216401454975, 1e-12);
+  EXPECT_NEAR(cam.T_b_c.R_b_c(1, 0), 0.999557249008, 1e-4);
+  const ImuNoiseParams n = eval::readAslImuNoise(base + "imu0/sensor.yaml");
+  EXPECT_NEAR(n.gyro_noise_density, 1.6968e-4, 1e-12);
+  EXPECT_EQ(eval::readAslImages(base + "cam0").size(), 95u);
+}
