@@ -1,0 +1,71 @@
+// Converts an ASL/EuRoC folder (mav0/ with cam0, imu0, state_groundtruth_estimate0) into a bag
+// with the topics of a real rig (bag_io.h): camera_info from cam0/sensor.yaml, /tf_static from
+// its T_BS, IMU covariances from imu0/sensor.yaml, ground truth as /ground_truth/pose.
+//
+//   vi_ekf_slam_asl_to_bag --asl FOLDER/mav0 --out FILE [--imu-margin S]
+// IMU samples outside the camera's time span (plus the margin, default 1 s) are left out, so a
+// short image sequence does not carry the whole IMU log.
+#include <cstdio>
+#include <iostream>
+#include <opencv2/imgcodecs.hpp>
+
+#include "vi_ekf_slam/eval/datasets.h"
+#include "vi_ekf_slam/ros/bag_io.h"
+
+using namespace vi_ekf_slam;
+
+int main(int argc, char** argv) {
+  std::string asl, out;
+  double margin = 1.0;
+  for (int i = 1; i + 1 < argc; i += 2) {
+    const std::string k = argv[i];
+    if (k == "--asl") asl = argv[i + 1];
+    else if (k == "--out") out = argv[i + 1];
+    else if (k == "--imu-margin") margin = std::stod(argv[i + 1]);
+  }
+  if (asl.empty() || out.empty()) {
+    std::cerr << "usage: vi_ekf_slam_asl_to_bag --asl FOLDER/mav0 --out FILE [--imu-margin S]\n";
+    return 2;
+  }
+  try {
+    const eval::AslCamera cam = eval::readAslCamera(asl + "/cam0/sensor.yaml");
+    const ImuNoiseParams noise = eval::readAslImuNoise(asl + "/imu0/sensor.yaml");
+    const std::vector<eval::AslImage> images = eval::readAslImages(asl + "/cam0");
+    const std::vector<ImuData> imu = eval::readAslImu(asl + "/imu0/data.csv");
+    std::vector<eval::AslState> gt;
+    try {
+      gt = eval::readAslGroundTruth(asl + "/state_groundtruth_estimate0/data.csv");
+    } catch (const std::runtime_error& e) {
+      std::cerr << "warning: no ground truth (" << e.what() << ")\n";
+    }
+    if (images.empty()) throw std::runtime_error("no images in " + asl + "/cam0");
+    const double t0 = images.front().t - margin, t1 = images.back().t + margin;
+    const double imu_rate = imu.size() > 1 ? (imu.size() - 1) / (imu.back().timestamp - imu.front().timestamp) : 200.0;
+    glue::RigBagWriter bag(out, glue::RigTopics(), CameraModel(cam.intrinsics), cam.T_b_c, noise, imu_rate,
+                           ros::Time(std::max(t0, imu.front().timestamp)));
+    size_t n_imu = 0, n_img = 0, n_gt = 0, k = 0;
+    for (const auto& img : images) {
+      for (; k < imu.size() && imu[k].timestamp <= img.t; ++k) {
+        if (imu[k].timestamp < t0) continue;
+        bag.imu(imu[k]);
+        ++n_imu;
+      }
+      const cv::Mat m = cv::imread(img.path, cv::IMREAD_GRAYSCALE);
+      if (m.empty()) throw std::runtime_error("cannot read image " + img.path);
+      bag.image(img.t, m);
+      ++n_img;
+    }
+    for (; k < imu.size() && imu[k].timestamp <= t1; ++k, ++n_imu) bag.imu(imu[k]);
+    for (const auto& s : gt) {
+      if (s.t < t0 || s.t > t1) continue;
+      bag.groundTruth(s.t, s.p, s.q);
+      ++n_gt;
+    }
+    std::printf("asl_to_bag: %s: %zu images, %zu IMU samples, %zu ground-truth poses (%.2f s)\n", out.c_str(), n_img,
+                n_imu, n_gt, images.back().t - images.front().t);
+  } catch (const std::exception& e) {
+    std::cerr << "error: " << e.what() << "\n";
+    return 1;
+  }
+  return 0;
+}
