@@ -16,7 +16,10 @@ DEVEL    := $(WS)/devel
 BIN      := $(DEVEL)/lib/vi_ekf_slam
 CATKIN   := cd $(WS) && catkin_make -j$(JOBS) -DCMAKE_BUILD_TYPE=Release -DDATA_DIR=$(DATA_DIR)
 
-.PHONY: all deps workspace build test demo study clean help
+.PHONY: all deps workspace build test demo study bag screenshot clean help
+
+BAG ?= results/bags/hallway.bag
+RVIZ ?= 0
 
 # make study [TRAJECTORY=file.txt] [RUNS=50] [SEED=1] [OUT=results/study] [CONFIGS=all|paper|a,b]
 TRAJECTORY ?= builtin
@@ -32,6 +35,8 @@ help:
 	@echo "make test   - install, build, run all tests (non-zero exit on failure)"
 	@echo "make build  - install missing packages and build in $(WS)"
 	@echo "make study  - Monte-Carlo consistency study (TRAJECTORY=builtin|file.txt RUNS= SEED= OUT=)"
+	@echo "make bag    - render the hallway walk into $(BAG)"
+	@echo "make demo RVIZ=1 - the demo with rviz"
 	@echo "make clean  - remove the build workspace"
 
 deps:
@@ -60,8 +65,15 @@ test: build
 	@echo "================================ test summary ================================"
 	cd $(WS) && catkin_test_results build/test_results
 
-demo: build
-	$(BIN)/vi_ekf_slam_simulate_short
+# The rendered hallway walk (2 s standing + 35 s walk), cached until the renderer changes.
+bag: build $(BAG)
+$(BAG): $(BIN)/vi_ekf_slam_make_bag
+	@mkdir -p $(dir $(BAG))
+	$(BIN)/vi_ekf_slam_make_bag --out $(BAG) --duration 35 --standing 2
+
+# The main job: the bag through the nodelet with roslaunch, once per mechanization.
+demo: build $(BAG)
+	source $(DEVEL)/setup.bash && python3 tools/demo.py --bag $(BAG) --out results/demo --docs docs/img $(if $(filter 1,$(RVIZ)),--rviz)
 
 # The plots of the built-in walk and of the TUM corridor are copied to docs/img for the README.
 study: build

@@ -3,6 +3,9 @@
 // evaluates the result against the bag's ground truth.
 //
 //   vi_ekf_slam_run_bag bag:=FILE [out:=DIR] [config:=YAML] [mechanization:=NAME|all] [NAME:=VALUE ...]
+//   vi_ekf_slam_run_bag bag:=FILE recorded:=NAME=REC.bag[,NAME=REC.bag...] [out:=DIR]
+// The second form evaluates recordings of live replays (odom, status, landmarks of the node)
+// against the same input bag, with the same metrics.
 //
 // Writes to out (default results/run_bag/<bag name>): <run>.tum (trajectory with the 6x6 pose
 // covariance), summary.json, summary.md, <run>_timeseries.csv; plot with tools/plot_run.py.
@@ -15,6 +18,8 @@
 #include <rosbag/view.h>
 #include <tf2/buffer_core.h>
 #include <tf2_msgs/TFMessage.h>
+#include <sensor_msgs/point_cloud2_iterator.h>
+#include <sstream>
 
 #include "vi_ekf_slam/core/frames.h"
 #include "vi_ekf_slam/eval/run_evaluation.h"
@@ -72,6 +77,36 @@ class RecordingSink : public glue::OutputSink {
 
 }  // namespace
 
+/// Evaluates a recording of the node's outputs (/vi_ekf_slam/odom, status, landmarks).
+eval::RunMetrics evaluateRecording(const std::string& path, const glue::InputBagInfo& info, double* mean_tracks) {
+  RecordingSink sink;
+  rosbag::Bag bag(path, rosbag::bagmode::Read);
+  std::map<std::int64_t, eval::EstimatedLandmark> last_cloud;
+  for (const rosbag::MessageInstance& m : rosbag::View(bag)) {
+    if (auto o = m.instantiate<nav_msgs::Odometry>()) sink.odometry(*o);
+    else if (auto s = m.instantiate<vi_ekf_slam::FilterStatus>()) sink.status(*s);
+    else if (auto c = m.instantiate<sensor_msgs::PointCloud2>()) {
+      last_cloud.clear();
+      sensor_msgs::PointCloud2ConstIterator<float> x(*c, "x"), y(*c, "y"), z(*c, "z"), u(*c, "birth_u"), v(*c, "birth_v");
+      sensor_msgs::PointCloud2ConstIterator<uint32_t> id(*c, "id");
+      sensor_msgs::PointCloud2ConstIterator<double> bt(*c, "birth_time");
+      for (; x != x.end(); ++x, ++y, ++z, ++u, ++v, ++id, ++bt) {
+        eval::EstimatedLandmark l;
+        l.id = *id;
+        l.p = Vec3(*x, *y, *z);
+        l.birth_time = *bt;
+        l.birth_uv = Eigen::Vector2d(*u, *v);
+        last_cloud[l.id] = l;
+      }
+    }
+  }
+  std::vector<eval::EstimatedLandmark> lms;
+  for (const auto& [id, l] : last_cloud) lms.push_back(l);
+  *mean_tracks = 0.0;
+  for (int t : sink.tracks) *mean_tracks += static_cast<double>(t) / sink.tracks.size();
+  return eval::evaluateRun(sink.poses, info.truth, lms, glue::landmarkTruthFromWorld(info));
+}
+
 int main(int argc, char** argv) {
   ros::Time::init();  // no master: wall time for the (throttled) log messages only
   std::map<std::string, std::string> args;
@@ -105,6 +140,26 @@ int main(int argc, char** argv) {
     return 1;
   }
   std::vector<std::pair<std::string, eval::RunMetrics>> results;
+  if (args.count("recorded")) {
+    std::stringstream list(args["recorded"]);
+    std::string item;
+    while (std::getline(list, item, ',')) {
+      const auto eq = item.find('=');
+      if (eq == std::string::npos) {
+        std::cerr << "recorded:= expects NAME=BAG[,NAME=BAG...]\n";
+        return 2;
+      }
+      double tracks = 0.0;
+      try {
+        results.emplace_back(item.substr(0, eq), evaluateRecording(item.substr(eq + 1), info, &tracks));
+      } catch (const std::exception& e) {
+        std::cerr << "error: " << item.substr(eq + 1) << ": " << e.what() << "\n";
+        return 1;
+      }
+      std::printf("%s: %d poses, %.1f tracks per frame\n", item.substr(0, eq).c_str(), results.back().second.frames, tracks);
+    }
+    mechanizations.clear();
+  }
   for (const std::string& m : mechanizations) {
     glue::YamlParams yaml = [&] {
       try {
@@ -165,7 +220,8 @@ int main(int argc, char** argv) {
     results.emplace_back(name, metrics);
   }
   std::ostringstream cfg;
-  cfg << "{\"bag\": \"" << bag_path << "\", \"config\": \"" << config << "\", \"mode\": \"offline\"}";
+  cfg << "{\"bag\": \"" << bag_path << "\", \"config\": \"" << config << "\", \"mode\": \""
+      << (args.count("recorded") ? "live replay" : "offline") << "\"}";
   eval::writeRunReport(out, results, cfg.str());
   std::ifstream md(out + "/summary.md");
   std::cout << "\n" << md.rdbuf() << "\nwritten to " << out << "\n";

@@ -117,13 +117,21 @@ RunMetrics evaluateRun(const std::vector<EstimatedPose>& est, const std::vector<
   m.final_scale_ratio = std::nan("");
   if (landmark_truth) {
     std::vector<Vec3> le, lt;
+    std::vector<double> err;
     for (const auto& l : landmarks) {
       if (auto p = landmark_truth(l)) {
         le.push_back(l.p);
         lt.push_back(*p);
+        err.push_back((R * l.p + T - *p).norm());
       }
     }
-    if (le.size() >= 2) m.final_scale_ratio = scaleRatio(le, lt);
+    m.map_landmarks = static_cast<int>(le.size());
+    if (le.size() >= 2) {
+      m.final_scale_ratio = scaleRatio(le, lt);
+      std::sort(err.begin(), err.end());
+      m.map_error_median_m = err[err.size() / 2];
+      m.map_error_p90_m = err[err.size() * 9 / 10];
+    }
   }
   return m;
 }
@@ -141,7 +149,9 @@ void writeRunReport(const std::string& dir, const std::vector<std::pair<std::str
        << num(m.distance_m) << ", \"nees_position\": " << num(m.nees_position)
        << ", \"nees_orientation\": " << num(m.nees_orientation) << ", \"nees_pose\": " << num(m.nees_pose)
        << ", \"consistent_fraction\": " << num(m.consistent_fraction)
-       << ", \"final_scale_ratio\": " << num(m.final_scale_ratio) << ", \"runs\": 1, \"frames\": " << m.frames
+       << ", \"final_scale_ratio\": " << num(m.final_scale_ratio) << ", \"map_landmarks\": " << m.map_landmarks
+       << ", \"map_error_median_m\": " << num(m.map_error_median_m) << ", \"map_error_p90_m\": " << num(m.map_error_p90_m)
+       << ", \"runs\": 1, \"frames\": " << m.frames
        << ", \"duration_s\": " << num(m.duration_s) << ", \"processing_ms_mean\": " << num(m.processing_ms_mean)
        << ", \"processing_ms_p95\": " << num(m.processing_ms_p95) << ", \"real_time_factor\": "
        << num(m.real_time_factor) << "}";
@@ -149,13 +159,15 @@ void writeRunReport(const std::string& dir, const std::vector<std::pair<std::str
   js << "\n}\n";
   std::ofstream md(dir + "/summary.md");
   md << "| run | ATE [m] | ATE posyaw [m] | ATE rot [deg] | final err [m] | final err [% of dist] | NEES pos | NEES rot "
-        "| NEES pose | gamma | ms/frame (p95) | real-time factor |\n|---|---|---|---|---|---|---|---|---|---|---|---|\n"
+        "| NEES pose | gamma | map err median [m] | ms/frame (p95) | real-time factor |\n"
+        "|---|---|---|---|---|---|---|---|---|---|---|---|---|\n"
      << std::fixed;
   for (const auto& [name, m] : runs) {
     md << "| " << name << " | " << std::setprecision(3) << m.ate_position_m << " | " << m.ate_posyaw_m << " | "
        << m.ate_orientation_deg << " | " << m.final_position_error_m << " | " << std::setprecision(2)
        << m.final_position_error_pct << " | " << m.nees_position << " | " << m.nees_orientation << " | " << m.nees_pose
-       << " | " << std::setprecision(3) << m.final_scale_ratio << " | " << std::setprecision(1) << m.processing_ms_mean
+       << " | " << std::setprecision(3) << m.final_scale_ratio << " | " << m.map_error_median_m << " | "
+       << std::setprecision(1) << m.processing_ms_mean
        << " (" << m.processing_ms_p95 << ") | " << m.real_time_factor << " |\n";
   }
   for (const auto& [name, m] : runs) {
