@@ -71,6 +71,11 @@ $(BAG): $(BIN)/vi_ekf_slam_make_bag
 	@mkdir -p $(dir $(BAG))
 	$(BIN)/vi_ekf_slam_make_bag --out $(BAG) --duration 35 --standing 2
 
+# rviz under Xvfb during a replay; results/demo/rviz.png (and docs/img/rviz.png for the README).
+screenshot: build $(BAG)
+	source $(DEVEL)/setup.bash && tools/screenshot.sh $(BAG) results/demo/rviz.png 25
+	cp results/demo/rviz.png docs/img/rviz.png
+
 # The main job: the bag through the nodelet with roslaunch, once per mechanization.
 demo: build $(BAG)
 	source $(DEVEL)/setup.bash && python3 tools/demo.py --bag $(BAG) --out results/demo --docs docs/img $(if $(filter 1,$(RVIZ)),--rviz)
