@@ -46,8 +46,10 @@ deps:
 # directory whose entries link to this repository's top-level items, so tools that follow
 # symlinks (rosrun, roslib) never loop back into the workspace.
 PKG_LINK := $(WS)/src/vi_ekf_slam
+# catkin caches PYTHONPATH at configure time and leaves out folders that do not exist yet, so the
+# devel Python folder (generated messages, used by the Python rostests) is created first.
 workspace:
-	@mkdir -p $(WS)/src
+	@mkdir -p $(WS)/src $(DEVEL)/lib/python3/dist-packages
 	@if [ -L $(PKG_LINK) ]; then rm $(PKG_LINK); fi
 	@mkdir -p $(PKG_LINK)
 	@find $(PKG_LINK) -maxdepth 1 -xtype l -delete
