@@ -21,12 +21,16 @@ CATKIN   := cd $(WS) && catkin_make -j$(JOBS) -DCMAKE_BUILD_TYPE=Release -DDATA_
 BAG ?= results/bags/hallway.bag
 RVIZ ?= 0
 
-# make study [TRAJECTORY=file.txt] [RUNS=50] [SEED=1] [OUT=results/study] [CONFIGS=all|paper|a,b]
+# make study [TRAJECTORY=file.txt] [IMU=imu0/data.csv] [RUNS=50] [SEED=1] [OUT=results/study] [CONFIGS=all|paper|a,b]
+#   IMU: a recorded ASL IMU stream of the same recording as TRAJECTORY (real IMU, simulated camera)
+#   IMU_NOISE: datasheet (the IMU's sensor.yaml) | euroc_mav (inflated for the MAV's vibration)
 TRAJECTORY ?= builtin
+IMU        ?=
+IMU_NOISE  ?= datasheet
 RUNS       ?= 50
 SEED       ?= 1
 CONFIGS    ?= all
-OUT        ?= results/study/$(basename $(notdir $(TRAJECTORY)))
+OUT        ?= results/study/$(if $(IMU),real_imu_$(IMU_NOISE)_$(notdir $(abspath $(dir $(TRAJECTORY))/../..)),$(basename $(notdir $(TRAJECTORY))))
 
 all: build
 
@@ -84,7 +88,7 @@ demo: build $(BAG)
 
 # The plots of the built-in walk and of the TUM corridor are copied to docs/img for the README.
 study: build
-	$(BIN)/vi_ekf_slam_study --trajectory $(TRAJECTORY) --runs $(RUNS) --seed $(SEED) --configs $(CONFIGS) --out $(OUT)
+	$(BIN)/vi_ekf_slam_study --trajectory $(TRAJECTORY) --runs $(RUNS) --seed $(SEED) --configs $(CONFIGS) --out $(OUT) $(if $(IMU),--imu $(IMU) --imu-noise $(IMU_NOISE))
 	python3 tools/plot_study.py $(OUT) $(if $(filter builtin %tum_corridor1_512_16_okvis.txt,$(TRAJECTORY)),--docs docs/img --prefix study_$(basename $(notdir $(TRAJECTORY))))
 
 clean:

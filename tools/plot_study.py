@@ -27,7 +27,10 @@ import numpy as np  # noqa: E402
 def read_csv(path):
     with open(path) as f:
         rows = list(csv.DictReader(f))
-    return {k: np.array([float(r[k]) if r[k] not in ("", "nan") else np.nan for r in rows]) for k in rows[0]}
+    d = {k: np.array([float(r[k]) if r[k] not in ("", "nan") else np.nan for r in rows]) for k in rows[0]}
+    if "t" in d and len(d["t"]) and d["t"][0] > 1e6:
+        d["t"] = d["t"] - d["t"][0]  # recorded data: absolute stamps -> seconds since the first frame
+    return d
 
 
 def vec(d, name):

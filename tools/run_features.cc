@@ -13,10 +13,7 @@ using namespace vi_ekf_slam;
 /// EqVIO settings in the file use 6x the accelerometer density), EqVIO's 1.9 px feature noise.
 EkfSlamConfig euroFeatureConfig() {
   EkfSlamConfig c;
-  c.imu_noise.gyro_noise_density = 2.5e-4;
-  c.imu_noise.accel_noise_density = 1.0e-2;
-  c.imu_noise.gyro_random_walk = 2.0e-5;
-  c.imu_noise.accel_random_walk = 3.0e-3;
+  c.imu_noise = eval::eurocMavImuNoise();
   c.update.pixel_noise_px = 2.0;
   c.landmark_timeout_s = 0.1;  // a lost track never comes back
   c.max_landmarks = 100;

@@ -4,7 +4,12 @@
 //
 //   vi_ekf_slam_study --trajectory builtin|FILE --runs 50 --seed 1 --out results/study
 //                     [--configs paper|all|name,name,...] [--threads N] [--density 1.0]
-//                     [--per-metre 15] [--max-duration S]
+//                     [--per-metre 15] [--max-duration S] [--imu ASL_IMU_CSV]
+//                     [--imu-noise datasheet|euroc_mav]
+//
+// With --imu the recorded IMU of the same recording replaces the synthesized one (real IMU,
+// simulated camera; see sim/recorded_imu.h). The filter is told the densities of the IMU's
+// sensor.yaml (datasheet) or those tuned for the EuRoC MAV in flight (euroc_mav).
 #include <algorithm>
 #include <atomic>
 #include <cstdio>
@@ -18,6 +23,8 @@
 #include <thread>
 
 #include "vi_ekf_slam/sim/monte_carlo.h"
+#include "vi_ekf_slam/eval/datasets.h"
+#include "vi_ekf_slam/sim/recorded_imu.h"
 #include "vi_ekf_slam/sim/scenarios.h"
 
 using namespace vi_ekf_slam;
@@ -35,13 +42,15 @@ struct Options {
   double density = 1.0;    // landmarks per m^2 of wall (built-in walk)
   double per_metre = 15.0; // landmarks per metre of path (TUM trajectories)
   double max_duration = 0; // truncate TUM trajectories [s], 0 = whole file
+  std::string imu;          // recorded IMU (ASL imu0/data.csv) instead of a synthesized one
+  std::string imu_noise = "datasheet";
 };
 
 [[noreturn]] void usage(const std::string& err) {
   std::cerr << "error: " << err << "\n"
             << "usage: vi_ekf_slam_study --trajectory builtin|FILE [--runs N] [--seed S] [--out DIR]\n"
                "       [--configs paper|all|NAME,...] [--threads N] [--density PER_M2] [--per-metre N]\n"
-               "       [--max-duration S]\n";
+               "       [--max-duration S] [--imu ASL_IMU_CSV] [--imu-noise datasheet|euroc_mav]\n";
   std::exit(2);
 }
 
@@ -61,6 +70,8 @@ Options parse(int argc, char** argv) {
       else if (k == "--density") o.density = std::stod(v);
       else if (k == "--per-metre") o.per_metre = std::stod(v);
       else if (k == "--max-duration") o.max_duration = std::stod(v);
+      else if (k == "--imu") o.imu = v;
+      else if (k == "--imu-noise") o.imu_noise = v;
       else usage("unknown option " + k);
     } catch (const std::logic_error&) {
       usage("bad value '" + v + "' for " + k);
@@ -68,6 +79,7 @@ Options parse(int argc, char** argv) {
   }
   if (o.runs < 2) usage("--runs must be >= 2 (NEES bands need several runs)");
   if (o.threads < 1) usage("--threads must be >= 1");
+  if (o.imu_noise != "datasheet" && o.imu_noise != "euroc_mav") usage("--imu-noise must be datasheet or euroc_mav");
   return o;
 }
 
@@ -128,7 +140,7 @@ void writeConfigFiles(const fs::path& dir, const sim::ConsistencySummary& s, con
   const eval::NeesBand b3 = eval::neesBand(3, s.runs);
   std::ofstream ts(dir / "timeseries.csv");
   ts << "t,avg_nees_p,avg_nees_q,avg_nees_pose,median_gamma,rms_p,band6_lo,band6_hi,band3_lo,band3_hi\n"
-     << std::setprecision(8);
+     << std::setprecision(15);
   for (size_t k = 0; k < s.t.size(); ++k) {
     ts << s.t[k] << "," << s.avg_nees_p[k] << "," << s.avg_nees_q[k] << "," << s.avg_nees_pose[k] << ","
        << s.median_gamma[k] << "," << s.rms_p[k] << "," << s.pose_band.lo << "," << s.pose_band.hi << "," << b3.lo
@@ -140,7 +152,7 @@ void writeConfigFiles(const fs::path& dir, const sim::ConsistencySummary& s, con
                         "e_q_sb", "s_q_sb", "e_p_ns", "s_p_ns", "e_q_ns", "s_q_ns"}) {
     r << "," << n << "_x," << n << "_y," << n << "_z";
   }
-  r << ",has_s,gamma,landmarks,new_landmarks,rejected,composed,nees_pose,update_ms\n" << std::setprecision(8);
+  r << ",has_s,gamma,landmarks,new_landmarks,rejected,composed,nees_pose,update_ms\n" << std::setprecision(15);
   for (const auto& m : run0.frames) {
     r << m.t;
     writeCsvRow(r, {m.p_true, m.p_est, m.p_true});
@@ -173,7 +185,12 @@ int main(int argc, char** argv) {
   sim::Scenario sc;
   std::string traj_name = "builtin_hallway_walk";
   try {
-    if (o.trajectory == "builtin") {
+    if (!o.imu.empty()) {
+      if (o.trajectory == "builtin") usage("--imu needs the ground truth of the same recording as --trajectory");
+      sc = sim::recordedImuScenario(o.trajectory, o.imu, o.per_metre, o.seed);
+      if (o.imu_noise == "euroc_mav") sc.imu.noise = eval::eurocMavImuNoise();
+      traj_name = fs::path(o.trajectory).filename().string() + " + recorded IMU";
+    } else if (o.trajectory == "builtin") {
       sc = sim::hallwayScenario(sim::HallwayParams(), o.density, o.seed);
     } else {
       sc = sim::tumScenario(o.trajectory, o.per_metre, o.seed);
@@ -184,18 +201,8 @@ int main(int argc, char** argv) {
     return 1;
   }
   if (o.max_duration > 0.0) {
-    // Truncate by wrapping the trajectory's end time.
-    struct Truncated : sim::Trajectory {
-      std::shared_ptr<const sim::Trajectory> base;
-      double end;
-      double startTime() const override { return base->startTime(); }
-      double endTime() const override { return end; }
-      sim::TrajectorySample sample(double t) const override { return base->sample(t); }
-    };
-    auto t = std::make_shared<Truncated>();
-    t->base = sc.trajectory;
-    t->end = std::min(sc.trajectory->endTime(), sc.trajectory->startTime() + o.max_duration);
-    sc.trajectory = t;
+    sc.trajectory = std::make_shared<sim::TruncatedTrajectory>(sc.trajectory,
+                                                                 sc.trajectory->startTime() + o.max_duration);
   }
   const auto configs = makeConfigs(o, sc);
   const double duration = sc.trajectory->endTime() - std::max(0.0, sc.trajectory->startTime());
@@ -238,7 +245,7 @@ int main(int argc, char** argv) {
   // summary.json: each configuration name -> metrics, plus the settings used.
   std::ofstream js(out / "summary.json");
   js << "{\n  \"config\": {\"trajectory\": \"" << traj_name << "\", \"seed\": " << o.seed << ", \"runs\": " << o.runs
-     << ", \"duration_s\": " << jsonNumber(duration) << ", \"world_landmarks\": " << sc.world.size()
+     << ", \"recorded_imu\": \"" << o.imu << "\", \"imu_noise\": \"" << o.imu_noise << "\", \"duration_s\": " << jsonNumber(duration) << ", \"world_landmarks\": " << sc.world.size()
      << ", \"imu_rate_hz\": " << sc.imu.rate_hz << ", \"camera_rate_hz\": " << sc.cam.rate_hz
      << ", \"pixel_noise_px\": " << sc.cam.pixel_noise_px
      << ", \"accel_noise_density\": " << jsonNumber(sc.imu.noise.accel_noise_density)

@@ -91,11 +91,16 @@ UpdateResult ekfUpdate(FilterState& state, const std::vector<FeatureObservation>
   // 3) Joseph form (I-KH) P (I-KH)^T + K R K^T, expanded without forming I-KH:
   //    P - K B^T - B K^T + K S K^T with B = P H^T. It holds for any gain K, so errors in K
   //    enter P only to second order, as with the textbook Joseph form, at O(n^2 m) cost.
-  //    Written as P + K W^T + W K^T with W = K S / 2 - B.
-  const Eigen::MatrixXd W = 0.5 * K * S - PHt;
-  P.noalias() += K * W.transpose();
-  P.noalias() += W * K.transpose();
-  symmetrize(P);
+  //    Written as P + K W^T + W K^T with W = K S / 2 - B, which is one product
+  //    [K W] [W K]^T. The result is symmetric, so only its lower triangle is computed (half
+  //    the flops of the dense product) and mirrored: P stays exactly symmetric.
+  Eigen::MatrixXd KW(n, 2 * m), WK(n, 2 * m);
+  KW.leftCols(m) = K;
+  KW.rightCols(m).noalias() = 0.5 * K * S - PHt;
+  WK.leftCols(m) = KW.rightCols(m);
+  WK.rightCols(m) = K;
+  P.triangularView<Eigen::Lower>() += KW * WK.transpose();
+  P.triangularView<Eigen::StrictlyUpper>() = P.transpose();
   state.boxplus(dx);
   return result;
 }

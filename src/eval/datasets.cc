@@ -110,6 +110,15 @@ ImuNoiseParams readAslImuNoise(const std::string& path) {
   return n;
 }
 
+ImuNoiseParams eurocMavImuNoise() {
+  ImuNoiseParams n;
+  n.gyro_noise_density = 2.5e-4;
+  n.accel_noise_density = 1.0e-2;
+  n.gyro_random_walk = 2.0e-5;
+  n.accel_random_walk = 3.0e-3;
+  return n;
+}
+
 std::vector<AslImage> readAslImages(const std::string& folder) {
   const std::string csv = folder + "/data.csv";
   std::ifstream in(csv);

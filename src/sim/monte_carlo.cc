@@ -39,7 +39,17 @@ RunResult runMonteCarloRun(const Scenario& scenario_in, const EkfSlamConfig& con
   std::mt19937_64 rng(seed);
   const double t0 = std::max(0.0, sc.trajectory->startTime());
   const NavState truth0 = trueNavState(*sc.trajectory, t0);
-  const NavState init = drawInitialEstimate(truth0, config.initial, rng);
+  NavState init = drawInitialEstimate(truth0, config.initial, rng);
+  if (sc.recorded_imu) {
+    // A real IMU has the biases it has: start from the true ones (when the ground truth knows
+    // them) minus an error drawn from the filter's prior, as the simulated runs do.
+    const Vec3 b_a0 = sc.recorded_imu->true_accel_bias.front();
+    const Vec3 b_g0 = sc.recorded_imu->true_gyro_bias.front();
+    const Vec3 e_a = gaussian3(rng, Vec3::Constant(config.initial.accel_bias_mps2));
+    const Vec3 e_g = gaussian3(rng, Vec3::Constant(config.initial.gyro_bias_radps));
+    if (b_a0.allFinite()) init.b_a = b_a0 - e_a;
+    if (b_g0.allFinite()) init.b_g = b_g0 - e_g;
+  }
 
   RunResult out;
   // True pose of the strapdown frame {s}: the true body pose at the start and at every

@@ -18,7 +18,9 @@ NavState trueNavState(const Trajectory& trajectory, double t) {
 SimRun runSimulation(const Scenario& sc, const EkfSlamConfig& config, const NavState& initial,
                      std::mt19937_64& rng, const FrameCallback& callback) {
   const Trajectory& traj = *sc.trajectory;
-  const ImuSequence imu = simulateImu(traj, sc.imu, rng);
+  ImuSequence simulated;
+  if (!sc.recorded_imu) simulated = simulateImu(traj, sc.imu, rng);
+  const ImuSequence& imu = sc.recorded_imu ? *sc.recorded_imu : simulated;
   EkfSlam filter(config, sc.camera, sc.T_b_c);
   TrackingCamera camera(sc.world, sc.camera, sc.T_b_c, sc.cam);
   filter.initialize(initial);

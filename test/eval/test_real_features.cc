@@ -21,10 +21,7 @@ TEST(RealFeatures, BestConfigurationFollowsTheEurocGroundTruth) {
   const eval::FeatureTrackData data = eval::readEqvioCsv(csv);
   ASSERT_EQ(data.frames.size(), 601u);
   EkfSlamConfig c;  // defaults: sensor_centric_composition, every update, inverse depth
-  c.imu_noise.gyro_noise_density = 2.5e-4;
-  c.imu_noise.accel_noise_density = 1.0e-2;
-  c.imu_noise.gyro_random_walk = 2.0e-5;
-  c.imu_noise.accel_random_walk = 3.0e-3;
+  c.imu_noise = eval::eurocMavImuNoise();
   c.update.pixel_noise_px = 2.0;
   c.landmark_timeout_s = 0.1;
   c.max_landmarks = 100;

@@ -160,7 +160,9 @@ TEST(FilterNode, BehavesOnThisInputStream) {
     ::testing::Test::RecordProperty("odom_rate_centihz", static_cast<int>(100 * hz));
     EXPECT_GT(rec.clouds, 5) << "landmark clouds";
     EXPECT_GT(rec.status.size(), 20u) << "status messages";
-    if (!rec.status.empty()) EXPECT_GT(rec.status.back().landmarks_in_state, 0);
+    if (!rec.status.empty()) {
+      EXPECT_GT(rec.status.back().landmarks_in_state, 0);
+    }
   } else {
     EXPECT_TRUE(rec.odom.empty()) << "odometry published although it should not";
   }

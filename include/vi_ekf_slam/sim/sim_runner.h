@@ -23,6 +23,9 @@ struct Scenario {
   CameraExtrinsics T_b_c;
   ImuSimParams imu;
   CameraSimParams cam;
+  /// A recorded IMU stream to use instead of synthesizing one from the trajectory (see
+  /// recorded_imu.h); its true biases are NaN where the ground truth does not know them.
+  std::shared_ptr<const ImuSequence> recorded_imu;
 };
 
 /// One camera time of a run.

@@ -3,6 +3,9 @@
 // synthesized IMU is consistent with the poses.
 #pragma once
 
+#include <algorithm>
+#include <memory>
+
 #include "vi_ekf_slam/core/so3.h"
 
 namespace vi_ekf_slam::sim {
@@ -51,6 +54,20 @@ class LissajousTrajectory : public Trajectory {
  private:
   Vec3 p0_, A_, w_, B_, u_;
   double duration_;
+};
+
+/// The part of another trajectory up to `end_time` (e.g. the first minute of a long file).
+class TruncatedTrajectory : public Trajectory {
+ public:
+  TruncatedTrajectory(std::shared_ptr<const Trajectory> base, double end_time)
+      : base_(std::move(base)), end_(std::min(end_time, base_->endTime())) {}
+  double startTime() const override { return base_->startTime(); }
+  double endTime() const override { return end_; }
+  TrajectorySample sample(double t) const override { return base_->sample(std::min(t, end_)); }
+
+ private:
+  std::shared_ptr<const Trajectory> base_;
+  double end_;
 };
 
 }  // namespace vi_ekf_slam::sim
