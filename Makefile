@@ -16,7 +16,7 @@ DEVEL    := $(WS)/devel
 BIN      := $(DEVEL)/lib/vi_ekf_slam
 CATKIN   := cd $(WS) && catkin_make -j$(JOBS) -DCMAKE_BUILD_TYPE=Release -DDATA_DIR=$(DATA_DIR)
 
-.PHONY: all deps workspace build test demo study bag screenshot clean help
+.PHONY: all deps workspace build test demo study bag screenshot bench clean help
 
 BAG ?= results/bags/hallway.bag
 RVIZ ?= 0
@@ -41,6 +41,7 @@ help:
 	@echo "make study  - Monte-Carlo consistency study (TRAJECTORY=builtin|file.txt RUNS= SEED= OUT=)"
 	@echo "make bag    - render the hallway walk into $(BAG)"
 	@echo "make demo RVIZ=1 - the demo with rviz"
+	@echo "make bench  - benchmarks (core vs map size, tracker, pipeline) -> results/bench/summary.json"
 	@echo "make clean  - remove the build workspace"
 
 deps:
@@ -90,6 +91,16 @@ demo: build $(BAG)
 study: build
 	$(BIN)/vi_ekf_slam_study --trajectory $(TRAJECTORY) --runs $(RUNS) --seed $(SEED) --configs $(CONFIGS) --out $(OUT) $(if $(IMU),--imu $(IMU) --imu-noise $(IMU_NOISE))
 	python3 tools/plot_study.py $(OUT) $(if $(filter builtin %tum_corridor1_512_16_okvis.txt,$(TRAJECTORY)),--docs docs/img --prefix study_$(basename $(notdir $(TRAJECTORY))))
+
+# Benchmarks (numbers, not pass/fail), pinned to one core: core operations against the map size
+# with fitted growth exponents, the tracker on rendered and real frames, the offline pipeline's
+# real-time factor and the live replay's latency. Table in bench/README.md.
+bench: build $(BAG)
+	@mkdir -p results/bench
+	taskset -c 0 $(BIN)/vi_ekf_slam_bench --benchmark_repetitions=3 --benchmark_report_aggregates_only=true \
+	  --benchmark_min_time=0.2 --benchmark_out=results/bench/google_benchmark.json --benchmark_out_format=json
+	source $(DEVEL)/setup.bash && python3 bench/pipeline.py --bag $(BAG) --config config/sim_hallway.yaml --out results/bench
+	python3 bench/summarize.py results/bench/google_benchmark.json results/bench/pipeline.json results/bench
 
 clean:
 	rm -rf $(WS)

@@ -3,6 +3,7 @@
 #include <benchmark/benchmark.h>
 
 #include "bench_fixtures.h"
+#include "vi_ekf_slam/core/allocator_tuning.h"
 #include "vi_ekf_slam/core/frame_change.h"
 #include "vi_ekf_slam/core/imu_propagation.h"
 
@@ -10,6 +11,9 @@ using namespace vi_ekf_slam;
 using vi_ekf_slam::bench::MapFixture;
 
 namespace {
+
+// As in the node and the tools (core/allocator_tuning.h): large buffers stay in the heap.
+const bool kAllocatorTuned = tuneAllocatorForLargeBuffers();
 
 constexpr Mechanization kSc = Mechanization::kSensorCentricComposition;
 const Vec3 kGravity = gravityInNav(9.81);

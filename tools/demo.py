@@ -73,7 +73,7 @@ def main():
             print("replaying %s through the nodelet (mechanization %s) ..." % (os.path.basename(a.bag), mech), flush=True)
             recorded.append("%s=%s" % (mech, replay(os.path.abspath(a.bag), mech, a.out, config, a.rviz, a.rate, log)))
             print("  done in %.0f s" % (time.time() - t0), flush=True)
-    r = subprocess.run(["rosrun", "vi_ekf_slam", "vi_ekf_slam_run_bag", "bag:=" + a.bag, "recorded:=" + ",".join(recorded),
+    r = subprocess.run(["rosrun", "vi_ekf_slam", "vi_ekf_slam_run_bag", "bag:=" + a.bag, "recorded:=" + ",".join(recorded), "plots:=false",
                         "out:=" + a.out], capture_output=True, text=True)
     if r.returncode != 0:
         print(r.stdout, r.stderr)

@@ -2,13 +2,14 @@
 // as the CPU allows and deterministically (messages in bag order, no threads, no master), and
 // evaluates the result against the bag's ground truth.
 //
-//   vi_ekf_slam_run_bag bag:=FILE [out:=DIR] [config:=YAML] [mechanization:=NAME|all] [NAME:=VALUE ...]
+//   vi_ekf_slam_run_bag bag:=FILE [out:=DIR] [config:=YAML] [mechanization:=NAME|all] [plots:=false] [NAME:=VALUE ...]
 //   vi_ekf_slam_run_bag bag:=FILE recorded:=NAME=REC.bag[,NAME=REC.bag...] [out:=DIR]
 // The second form evaluates recordings of live replays (odom, status, landmarks of the node)
 // against the same input bag, with the same metrics.
 //
 // Writes to out (default results/run_bag/<bag name>): <run>.tum (trajectory with the 6x6 pose
-// covariance), summary.json, summary.md, <run>_timeseries.csv; plot with tools/plot_run.py.
+// covariance), summary.json, summary.md, <run>_timeseries.csv, and the plots of tools/plot_run.py
+// (topview.png, errors.png, nees.png; plots:=false to skip them).
 #include <chrono>
 #include <filesystem>
 #include <fstream>
@@ -170,7 +171,7 @@ int main(int argc, char** argv) {
       }
     }();
     for (const auto& [k, v] : args) {
-      if (k != "bag" && k != "out" && k != "config" && k != "mechanization") yaml.set(k, v);
+      if (k != "bag" && k != "out" && k != "config" && k != "mechanization" && k != "plots") yaml.set(k, v);
     }
     if (!m.empty()) yaml.set("mechanization", m);
     glue::NodeParams params;
@@ -225,5 +226,10 @@ int main(int argc, char** argv) {
   eval::writeRunReport(out, results, cfg.str());
   std::ifstream md(out + "/summary.md");
   std::cout << "\n" << md.rdbuf() << "\nwritten to " << out << "\n";
+  if (!args.count("plots") || args["plots"] != "false") {
+    // The study's plots (top view, errors with 3-sigma, NEES) with Debian's Python (matplotlib).
+    const std::string cmd = "/usr/bin/python3 '" + std::string(VI_EKF_SLAM_SOURCE_DIR) + "/tools/plot_run.py' '" + out + "'";
+    if (std::system(cmd.c_str()) != 0) std::cerr << "warning: plotting failed: " << cmd << "\n";
+  }
   return 0;
 }

@@ -23,6 +23,7 @@
 #include <thread>
 
 #include "vi_ekf_slam/sim/monte_carlo.h"
+#include "vi_ekf_slam/core/allocator_tuning.h"
 #include "vi_ekf_slam/eval/datasets.h"
 #include "vi_ekf_slam/sim/recorded_imu.h"
 #include "vi_ekf_slam/sim/scenarios.h"
@@ -181,6 +182,7 @@ std::string jsonNumber(double v) {
 }  // namespace
 
 int main(int argc, char** argv) {
+  tuneAllocatorForLargeBuffers();
   const Options o = parse(argc, argv);
   sim::Scenario sc;
   std::string traj_name = "builtin_hallway_walk";

@@ -127,6 +127,25 @@ void FilterState::propagateCovariance(const MotionMatrix& Phi, const MotionMatri
   auto Pss = P_.topLeftCorner(m, m);
   MotionMatrix Pn = Phi * Pss * Phi.transpose() + Qd;
   Pss = 0.5 * (Pn + Pn.transpose());
+  propagateCrossCovariance(Phi);
+}
+
+void FilterState::propagateCovarianceDiagonalNoise(const MotionMatrix& Phi, const MotionVector& q) {
+  const int m = motionDim();
+  if (Phi.rows() != m || q.size() != m) throw std::invalid_argument("propagateCovariance: size");
+  auto Pss = P_.topLeftCorner(m, m);
+  MotionMatrix Pq = Pss;
+  Pq.diagonal() += q;
+  MotionMatrix PhiPq;
+  PhiPq.noalias() = Phi * Pq;
+  MotionMatrix Pn;
+  Pn.noalias() = PhiPq * Phi.transpose();
+  Pss = 0.5 * (Pn + Pn.transpose());
+  propagateCrossCovariance(Phi);
+}
+
+void FilterState::propagateCrossCovariance(const MotionMatrix& Phi) {
+  const int m = motionDim();
   if (numLandmarks() == 0) return;
   if (!lazy_cross_) {
     const int nm = dim() - m;
@@ -136,7 +155,8 @@ void FilterState::propagateCovariance(const MotionMatrix& Phi, const MotionMatri
     return;
   }
   if (has_pending_phi_) {
-    MotionMatrix acc = Phi * pending_phi_;
+    MotionMatrix acc;
+    acc.noalias() = Phi * pending_phi_;
     pending_phi_ = acc;
   } else {
     pending_phi_ = Phi;

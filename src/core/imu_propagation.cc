@@ -54,19 +54,21 @@ MotionMatrix transitionMatrix(const MotionState& x, Mechanization m, const Vec3&
   return Phi;
 }
 
-MotionMatrix discreteNoise(const MotionMatrix& Phi, Mechanization m, const ImuNoiseParams& noise,
-                           double dt) {
+MotionVector continuousNoiseDiagonal(Mechanization m, const ImuNoiseParams& noise, double dt) {
   using namespace idx;
-  const int n = motionDim(m);
   // G Q G^T: the noise enters through rotations (C n_a, C n_g) of isotropic white noise, so
   // the rotated blocks stay sigma^2 * I.
-  Eigen::Matrix<double, Eigen::Dynamic, 1, 0, kMaxMotionDim, 1> q =
-      Eigen::Matrix<double, Eigen::Dynamic, 1, 0, kMaxMotionDim, 1>::Zero(n);
-  q.segment<3>(kV).setConstant(noise.accel_noise_density * noise.accel_noise_density);
-  q.segment<3>(kBa).setConstant(noise.accel_random_walk * noise.accel_random_walk);
-  q.segment<3>(kPsi).setConstant(noise.gyro_noise_density * noise.gyro_noise_density);
-  q.segment<3>(kBg).setConstant(noise.gyro_random_walk * noise.gyro_random_walk);
-  MotionMatrix Qd = Phi * (q * dt).asDiagonal() * Phi.transpose();
+  MotionVector q = MotionVector::Zero(motionDim(m));
+  q.segment<3>(kV).setConstant(noise.accel_noise_density * noise.accel_noise_density * dt);
+  q.segment<3>(kBa).setConstant(noise.accel_random_walk * noise.accel_random_walk * dt);
+  q.segment<3>(kPsi).setConstant(noise.gyro_noise_density * noise.gyro_noise_density * dt);
+  q.segment<3>(kBg).setConstant(noise.gyro_random_walk * noise.gyro_random_walk * dt);
+  return q;
+}
+
+MotionMatrix discreteNoise(const MotionMatrix& Phi, Mechanization m, const ImuNoiseParams& noise,
+                           double dt) {
+  MotionMatrix Qd = Phi * continuousNoiseDiagonal(m, noise, dt).asDiagonal() * Phi.transpose();
   return 0.5 * (Qd + Qd.transpose());
 }
 
@@ -75,7 +77,7 @@ void propagateState(FilterState& state, const Vec3& wm, const Vec3& am, double d
   const Mechanization m = state.mechanization();
   const MotionMatrix Phi = transitionMatrix(state.x, m, wm, am, dt, g_n);
   strapdownStep(state.x, m, wm, am, dt, g_n);
-  state.propagateCovariance(Phi, discreteNoise(Phi, m, noise, dt));
+  state.propagateCovarianceDiagonalNoise(Phi, continuousNoiseDiagonal(m, noise, dt));
   state.timestamp += dt;
 }
 

@@ -6,12 +6,14 @@
 #include <stdexcept>
 #include <tf2/exceptions.h>
 
+#include "vi_ekf_slam/core/allocator_tuning.h"
 #include "vi_ekf_slam/ros/conversions.h"
 
 namespace vi_ekf_slam::glue {
 
 EkfSlamProcessor::EkfSlamProcessor(const NodeParams& params, OutputSink& sink, const tf2::BufferCore* tf)
     : params_(params), sink_(sink), tf_(tf), static_init_(params.static_init) {
+  if (params_.node.tune_allocator) tuneAllocatorForLargeBuffers();
   if (params_.node.extrinsic_source == "parameters") {
     const auto& v = params_.node.T_b_c;
     CameraExtrinsics T;

@@ -252,6 +252,7 @@ std::string loadParams(const ParamSource& source, NodeParams* out) {
   rd("world_frame", n.world_frame);
   rd("body_frame", n.body_frame);
   rd("publish_tf", n.publish_tf);
+  rd("tune_allocator", n.tune_allocator);
   rd("camera_time_offset_s", n.camera_time_offset_s);
   rd("camera_calibration_file", n.camera_calibration_file);
   rd("extrinsic_source", n.extrinsic_source);
@@ -293,7 +294,8 @@ std::string describeParams(const NodeParams& p) {
   const TrackerParams& t = p.tracker;
   const NodeOptions& n = p.node;
   s << "vi_ekf_slam parameters:\n"
-    << "  frames: world_frame=" << n.world_frame << " body_frame=" << n.body_frame << " publish_tf=" << n.publish_tf << "\n"
+    << "  frames: world_frame=" << n.world_frame << " body_frame=" << n.body_frame << " publish_tf=" << n.publish_tf
+      << " tune_allocator=" << n.tune_allocator << "\n"
     << "  mechanization=" << toString(f.mechanization) << " composition_trigger=" << toString(f.composition_trigger)
     << " composition_new_landmarks=" << f.composition_new_landmarks << "\n"
     << "  landmark_init=" << toString(f.landmark_init) << " landmark_depth_m=" << f.landmark_depth_m

@@ -24,7 +24,7 @@ struct TrackerParams {
   double min_distance_px = 12.0;    ///< minimum distance between corners [px]
   double quality_level = 0.01;      ///< Shi-Tomasi quality relative to the best corner
   int fast_threshold = 20;          ///< FAST intensity threshold [gray levels]
-  int klt_window_px = 21;           ///< KLT window size [px]
+  int klt_window_px = 15;           ///< KLT window size [px]
   int klt_pyramid_levels = 3;       ///< KLT pyramid levels above the image
   double fb_threshold_px = 1.0;     ///< forward-backward error bound [px]
   double ransac_threshold_px = 1.0; ///< epipolar RANSAC threshold (undistorted) [px]

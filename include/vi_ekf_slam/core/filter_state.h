@@ -18,6 +18,7 @@ namespace vi_ekf_slam {
 /// Fixed-capacity matrix for the motion block (15x15 or 21x21) without heap allocation.
 using MotionMatrix = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::ColMajor,
                                    idx::kMaxMotionDim, idx::kMaxMotionDim>;
+using MotionVector = Eigen::Matrix<double, Eigen::Dynamic, 1, Eigen::ColMajor, idx::kMaxMotionDim, 1>;
 
 /// Nominal motion state. In the world-centric filter {s} == {n}, p_n_s == 0 and q_n_s == I.
 struct MotionState {
@@ -78,6 +79,9 @@ class FilterState {
   /// and applied to P_s'm once, when the full covariance is next read, so an IMU sample costs
   /// the same whatever the map size.
   void propagateCovariance(const MotionMatrix& Phi, const MotionMatrix& Qd);
+  /// The same with Qd = Phi diag(q) Phi^T (eq. 18 with G Q G^T dt diagonal), evaluated as
+  /// Phi (P_s's' + diag(q)) Phi^T: one matrix product fewer per IMU sample.
+  void propagateCovarianceDiagonalNoise(const MotionMatrix& Phi, const MotionVector& q);
   void setLazyCrossCovariance(bool lazy);
   bool hasPendingCrossPropagation() const { return has_pending_phi_; }
 
@@ -92,6 +96,8 @@ class FilterState {
              std::vector<Landmark> landmarks, Eigen::MatrixXd P);
 
  private:
+  /// P_s'm <- Phi P_s'm, or accumulated into the pending product (lazy cross-covariance).
+  void propagateCrossCovariance(const MotionMatrix& Phi);
   void flush() const;
   void rebuildIndex();
 

@@ -40,6 +40,9 @@ void strapdownStep(MotionState& x, Mechanization m, const Vec3& wm, const Vec3& 
 MotionMatrix transitionMatrix(const MotionState& x, Mechanization m, const Vec3& wm, const Vec3& am,
                               double dt, const Vec3& g_n);
 
+/// Diagonal of G Q G^T dt (isotropic noise through rotations stays diagonal), per error state.
+MotionVector continuousNoiseDiagonal(Mechanization m, const ImuNoiseParams& noise, double dt);
+
 /// Discrete process noise Phi * G Q G^T * Phi^T * dt (paper eq. 18).
 MotionMatrix discreteNoise(const MotionMatrix& Phi, Mechanization m, const ImuNoiseParams& noise,
                            double dt);

@@ -18,6 +18,7 @@ struct NodeOptions {
   std::string world_frame = "world";  ///< fixed frame of the outputs (z up)
   std::string body_frame = "imu";     ///< the IMU/body frame, child of world_frame
   bool publish_tf = true;
+  bool tune_allocator = true;  ///< see core/allocator_tuning.h
   double camera_time_offset_s = 0.0;  ///< t_imu = t_image + offset [s]
   std::string camera_calibration_file;  ///< ROS camera YAML used while no camera_info arrives
   std::string extrinsic_source = "tf";  ///< "tf" (body_frame <- image frame_id) or "parameters"
