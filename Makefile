@@ -16,7 +16,7 @@ DEVEL    := $(WS)/devel
 BIN      := $(DEVEL)/lib/vi_ekf_slam
 CATKIN   := cd $(WS) && catkin_make -j$(JOBS) -DCMAKE_BUILD_TYPE=Release -DDATA_DIR=$(DATA_DIR)
 
-.PHONY: all deps workspace build test demo study bag screenshot bench clean help
+.PHONY: all deps workspace build test demo study bag screenshot bench soak clean help
 
 BAG ?= results/bags/hallway.bag
 RVIZ ?= 0
@@ -42,6 +42,7 @@ help:
 	@echo "make bag    - render the hallway walk into $(BAG)"
 	@echo "make demo RVIZ=1 - the demo with rviz"
 	@echo "make bench  - benchmarks (core vs map size, tracker, pipeline) -> results/bench/summary.json"
+	@echo "make soak   - 30 min endurance walk per mechanization (SOAK_MINUTES=) -> results/soak"
 	@echo "make clean  - remove the build workspace"
 
 deps:
@@ -101,6 +102,13 @@ bench: build $(BAG)
 	  --benchmark_min_time=0.2 --benchmark_out=results/bench/google_benchmark.json --benchmark_out_format=json
 	source $(DEVEL)/setup.bash && python3 bench/pipeline.py --bag $(BAG) --config config/sim_hallway.yaml --out results/bench
 	python3 bench/summarize.py results/bench/google_benchmark.json results/bench/pipeline.json results/bench
+
+# Endurance: a 30-minute walk (laps) per mechanization through the core; error, map size and
+# resident memory over time (a 4-minute version runs in make test).
+SOAK_MINUTES ?= 30
+soak: build
+	$(BIN)/vi_ekf_slam_soak --minutes $(SOAK_MINUTES) --out results/soak
+	python3 tools/plot_soak.py results/soak --docs docs/img
 
 clean:
 	rm -rf $(WS)

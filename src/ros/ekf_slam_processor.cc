@@ -51,7 +51,7 @@ void EkfSlamProcessor::reset(const std::string& reason) {
   queue_.clear();
   births_.clear();
   prev_q_n_b_.reset();
-  last_imu_t_ = last_image_t_ = -1e300;
+  last_imu_t_ = last_image_t_ = last_processed_t_ = -1e300;
   ++counters_.resets;
   sink_.event("reset: " + reason);
 }
@@ -273,6 +273,21 @@ void EkfSlamProcessor::processImage(const PendingImage& img) {
   }
   ++counters_.images_processed;
   counters_.rejected_observations += static_cast<long>(r.update.rejected_ids.size());
+  if (img.t - last_processed_t_ > params_.node.max_image_gap_s && last_processed_t_ > -1e299) {
+    ++counters_.image_gaps;
+    reportProblem("no image for " + std::to_string(img.t - last_processed_t_) + " s");
+  }
+  last_processed_t_ = img.t;
+  if (frame.features.empty()) {
+    ++counters_.images_without_features;
+    reportProblem("no features tracked in the image (camera covered or dark?)");
+  }
+  const int rejected = static_cast<int>(r.update.rejected_ids.size());
+  if (rejected >= 5 && rejected > r.update.accepted) {
+    ++counters_.outlier_bursts;
+    reportProblem("outlier burst: " + std::to_string(rejected) + " of " + std::to_string(rejected + r.update.accepted) +
+                  " observations rejected by the gate");
+  }
   const NavState nav = filter_->navState();
   if (!nav.p_n_b.allFinite() || !nav.q_n_b.coeffs().allFinite() || !nav.cov.allFinite()) {
     reset("the filter state became non-finite");

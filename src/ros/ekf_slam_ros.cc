@@ -155,6 +155,9 @@ void EkfSlamRos::diagnoseInputs(diagnostic_updater::DiagnosticStatusWrapper& sta
   stat.add("images dropped: no camera calibration", c.images_no_camera);
   stat.add("images dropped: no IMU past stamp", c.images_queue_dropped);
   stat.add("camera_info invalid", c.camera_info_invalid);
+  stat.add("image gaps", c.image_gaps);
+  stat.add("images without features", c.images_without_features);
+  stat.add("outlier bursts", c.outlier_bursts);
   stat.add("last problem", last);
 }
 

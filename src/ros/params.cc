@@ -260,6 +260,7 @@ std::string loadParams(const ParamSource& source, NodeParams* out) {
   rd("max_image_queue", n.max_image_queue);
   rd("time_jump_reset_s", n.time_jump_reset_s);
   rd("path_max_length", n.path_max_length);
+  rd("max_image_gap_s", n.max_image_gap_s);
 
   err << fromReconfigure(c, &p);
   if (n.world_frame.empty() || n.body_frame.empty()) err << "world_frame and body_frame must not be empty\n";
@@ -280,6 +281,7 @@ std::string loadParams(const ParamSource& source, NodeParams* out) {
   if (n.max_image_queue < 1) err << "max_image_queue must be >= 1\n";
   if (!(n.time_jump_reset_s > 0.0)) err << "time_jump_reset_s must be > 0 s\n";
   if (n.path_max_length < 1) err << "path_max_length must be >= 1\n";
+  if (!(n.max_image_gap_s > 0.0)) err << "max_image_gap_s must be > 0 [s]\n";
   if (!(s.window_s > 0.05)) err << "static_window_s must be > 0.05 s\n";
   if (!(s.max_accel_std_mps2 > 0.0) || !(s.max_gyro_std_radps > 0.0)) {
     err << "static_max_accel_std_mps2 and static_max_gyro_std_radps must be > 0\n";
@@ -319,7 +321,7 @@ std::string describeParams(const NodeParams& p) {
     << "  camera: time_offset " << n.camera_time_offset_s << " [s], calibration_file='" << n.camera_calibration_file
     << "', extrinsic_source=" << n.extrinsic_source << "\n"
     << "  sync: max_image_queue=" << n.max_image_queue << " time_jump_reset_s=" << n.time_jump_reset_s
-    << " [s] path_max_length=" << n.path_max_length;
+    << " [s] path_max_length=" << n.path_max_length << " max_image_gap_s=" << n.max_image_gap_s << " [s]";
   if (n.extrinsic_source == "parameters" && n.T_b_c.size() == 7) {
     s << "\n  T_b_c (x y z qx qy qz qw) = ";
     for (double v : n.T_b_c) s << v << " ";

@@ -16,7 +16,7 @@ NavState trueNavState(const Trajectory& trajectory, double t) {
 }
 
 SimRun runSimulation(const Scenario& sc, const EkfSlamConfig& config, const NavState& initial,
-                     std::mt19937_64& rng, const FrameCallback& callback) {
+                     std::mt19937_64& rng, const FrameCallback& callback, bool keep_frames) {
   const Trajectory& traj = *sc.trajectory;
   ImuSequence simulated;
   if (!sc.recorded_imu) simulated = simulateImu(traj, sc.imu, rng);
@@ -46,7 +46,7 @@ SimRun runSimulation(const Scenario& sc, const EkfSlamConfig& config, const NavS
       rec.estimate = filter.navState();
       rec.landmarks_in_state = filter.state().numLandmarks();
       if (callback) callback(filter, rec);
-      run.frames.push_back(std::move(rec));
+      if (keep_frames) run.frames.push_back(std::move(rec));
     }
   }
   run.final_landmarks = filter.landmarks();

@@ -4,7 +4,10 @@
 // z-up world). ~fault injects one kind of bad input:
 //   none | nan_imu | imu_repeat | image_repeat | time_jump | imu_gap | image_before_imu |
 //   encoding_cycle | encoding:<enc> | camera_info_missing | camera_info_zero |
-//   compressed (PNG on /camera/image_raw/compressed instead of raw images)
+//   compressed (PNG on /camera/image_raw/compressed instead of raw images) |
+//   image_dropout (no images for 2 s from t = 4 s) | camera_covered (uniform dark images for
+//   5 s from t = 3 s) | outlier_burst (for 0.5 s from t = 4 s the images are those of 1.5 s
+//   earlier: every track is wrong, consistently)
 #include <geometry_msgs/PoseStamped.h>
 #include <opencv2/imgproc.hpp>
 #include <ros/ros.h>
@@ -152,20 +155,25 @@ int main(int argc, char** argv) {
       last_imu = m;
     } else {
       const size_t k = k_img++;
+      if (fault == "image_dropout" && t >= 4.0 && t < 6.0) continue;
       std_msgs::Header h;
       h.stamp = stamp;
       h.frame_id = "camera";
       std::string enc = "mono8";
       if (fault == "encoding_cycle") enc = cycle[k % 5];
       if (fault.rfind("encoding:", 0) == 0) enc = fault.substr(9);
-      sensor_msgs::ImagePtr img = encode(frames[k], enc, h);
+      cv::Mat frame = frames[k];
+      if (fault == "camera_covered" && t >= 3.0 && t < 8.0) frame = cv::Mat(frames[k].size(), CV_8UC1, cv::Scalar(12));
+      const size_t stale = static_cast<size_t>(1.5 * sc.cam.rate_hz);
+      if (fault == "outlier_burst" && t >= 4.0 && t < 4.5 && k >= stale) frame = frames[k - stale];
+      sensor_msgs::ImagePtr img = encode(frame, enc, h);
       if (fault != "camera_info_missing") info_pub.publish(cameraInfo(sc.camera, stamp, fault == "camera_info_zero"));
       if (fault == "image_repeat" && t >= 3.0 && t < 3.5 && last_img && k % 3 == 0) img_pub.publish(last_img);
       if (fault == "compressed") {
         sensor_msgs::CompressedImage c;
         c.header = h;
         c.format = "mono8; png compressed ";
-        cv::imencode(".png", frames[k], c.data);
+        cv::imencode(".png", frame, c.data);
         compressed_pub.publish(c);
       } else {
         img_pub.publish(img);

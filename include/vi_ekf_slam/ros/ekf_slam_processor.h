@@ -30,6 +30,10 @@ struct InputCounters {
   long images_received = 0, images_processed = 0, images_bad_encoding = 0, images_stale = 0;
   long images_late = 0, images_before_init = 0, images_no_camera = 0, images_queue_dropped = 0;
   long camera_info_invalid = 0, rejected_observations = 0, resets = 0;
+  // Faults the filter rides through (reported, not dropped): no image for longer than
+  // max_image_gap_s, images in which no feature could be tracked (camera covered, darkness), and
+  // updates in which the gate rejected most observations (a burst of outlier tracks).
+  long image_gaps = 0, images_without_features = 0, outlier_bursts = 0;
 };
 
 /// A landmark as published: its estimate and where its track started (time, pixel), which lets
@@ -108,6 +112,7 @@ class EkfSlamProcessor {
   double last_imu_t_ = -1e300, last_image_t_ = -1e300;
   Vec3 last_gyro_ = Vec3::Zero();
   std::optional<Quat> prev_q_n_b_;
+  double last_processed_t_ = -1e300;  ///< stamp of the last processed image [s]
   InputCounters counters_;
   int last_tracks_ = 0;
   double last_update_ms_ = 0.0, total_processing_ms_ = 0.0;

@@ -26,6 +26,7 @@ struct NodeOptions {
   int max_image_queue = 20;           ///< images waiting for IMU beyond this are dropped
   double time_jump_reset_s = 1.0;     ///< a stamp this far backwards resets the filter [s]
   int path_max_length = 2000;         ///< poses kept in the published path
+  double max_image_gap_s = 0.5;       ///< longer gaps between processed images are reported [s]
 };
 
 struct NodeParams {

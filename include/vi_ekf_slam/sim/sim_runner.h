@@ -49,9 +49,10 @@ struct SimRun {
 using FrameCallback = std::function<void(EkfSlam&, FrameRecord&)>;
 
 /// Runs the filter from `initial` (usually the truth plus an error drawn by the caller).
-/// The random generator drives sensor noise.
+/// The random generator drives sensor noise. keep_frames = false leaves SimRun::frames empty
+/// (long runs that only need the callback).
 SimRun runSimulation(const Scenario& scenario, const EkfSlamConfig& config, const NavState& initial,
-                     std::mt19937_64& rng, const FrameCallback& callback = nullptr);
+                     std::mt19937_64& rng, const FrameCallback& callback = nullptr, bool keep_frames = true);
 
 /// The true navigation state at time t (zero biases) for initialization.
 NavState trueNavState(const Trajectory& trajectory, double t);

@@ -1,0 +1,113 @@
+// Endurance run (issue 6): a 30-minute pedestrian walk doing laps around a block of corridors,
+// driven offline through the core with simulated feature tracks, for every mechanization.
+// Records the position error with its 3-sigma, the map size and the process's resident memory
+// once per second; fails (exit 1) on any non-finite estimate.
+//
+//   vi_ekf_slam_soak [--minutes 30] [--out results/soak] [--mechanizations all|NAME,...] [--seed 1]
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <iostream>
+#include <sstream>
+
+#include "vi_ekf_slam/core/allocator_tuning.h"
+#include "vi_ekf_slam/sim/loop_walk.h"
+#include "vi_ekf_slam/sim/monte_carlo.h"
+
+using namespace vi_ekf_slam;
+namespace fs = std::filesystem;
+
+namespace {
+
+/// Resident set size of this process [MB] (Linux /proc).
+double rssMb() {
+  std::ifstream f("/proc/self/status");
+  std::string line;
+  while (std::getline(f, line)) {
+    if (line.rfind("VmRSS:", 0) == 0) return std::stod(line.substr(6)) / 1024.0;
+  }
+  return std::nan("");
+}
+
+struct Row {
+  double t, err, sigma3, rss;
+  int landmarks;
+};
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  tuneAllocatorForLargeBuffers();
+  double minutes = 30.0;
+  std::string out = "results/soak", which = "all";
+  std::uint64_t seed = 1;
+  for (int i = 1; i + 1 < argc; i += 2) {
+    const std::string k = argv[i], v = argv[i + 1];
+    if (k == "--minutes") minutes = std::stod(v);
+    else if (k == "--out") out = v;
+    else if (k == "--mechanizations") which = v;
+    else if (k == "--seed") seed = std::stoull(v);
+    else {
+      std::cerr << "unknown option " << k << "\n";
+      return 2;
+    }
+  }
+  std::vector<Mechanization> mechs;
+  for (auto m : {Mechanization::kWorldCentric, Mechanization::kSensorCentric, Mechanization::kSensorCentricComposition}) {
+    if (which == "all" || which.find(toString(m)) != std::string::npos) mechs.push_back(m);
+  }
+  sim::HallwayParams gait;
+  gait.standing_s = 2.0;
+  sim::LoopParams loop;
+  loop.duration_s = 60.0 * minutes;
+  const sim::Scenario sc = sim::loopScenario(gait, loop, seed);
+  fs::create_directories(out);
+  std::ostringstream md;
+  md << "| mechanization | duration [min] | distance [m] | final error [m] | final error [%] | max landmarks | "
+        "RSS start [MB] | RSS end [MB] | non-finite | wall [s] |\n|---|---|---|---|---|---|---|---|---|---|\n";
+  bool all_finite = true;
+  for (Mechanization m : mechs) {
+    EkfSlamConfig c;  // the node's defaults: composition every update, inverse depth, 100 landmarks
+    c.mechanization = m;
+    c.imu_noise = sc.imu.noise;
+    c.update.pixel_noise_px = sc.cam.pixel_noise_px;
+    std::vector<Row> rows;
+    int nonfinite = 0, max_lm = 0;
+    double dist = 0.0;
+    Vec3 last_true = Vec3::Zero();
+    const auto tic = std::chrono::steady_clock::now();
+    double rss0 = 0.0;  // after the IMU stream was synthesized and the first image processed
+    std::mt19937_64 rng(seed);
+    const NavState init = sim::drawInitialEstimate(sim::trueNavState(*sc.trajectory, sc.trajectory->startTime()),
+                                                   c.initial, rng);
+    int frame = 0;
+    sim::runSimulation(sc, c, init, rng, [&](EkfSlam& f, sim::FrameRecord& rec) {
+      const NavState& n = rec.estimate;
+      if (!n.p_n_b.allFinite() || !n.cov.allFinite()) ++nonfinite;
+      if (frame > 0) dist += (rec.truth.p_n_b - last_true).norm();
+      last_true = rec.truth.p_n_b;
+      max_lm = std::max(max_lm, f.state().numLandmarks());
+      if (frame == 0) rss0 = rssMb();
+      if (frame++ % 28 == 0) {
+        const double sigma = std::sqrt(n.cov.block<3, 3>(0, 0).trace());
+        rows.push_back({rec.t, (rec.truth.p_n_b - n.p_n_b).norm(), 3.0 * sigma, rssMb(), f.state().numLandmarks()});
+      }
+    }, /*keep_frames=*/false);
+    const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - tic).count();
+    std::ofstream csv(fs::path(out) / (toString(m) + ".csv"));
+    csv << "t,position_error_m,sigma3_m,rss_mb,landmarks\n";
+    for (const Row& r : rows) csv << r.t << "," << r.err << "," << r.sigma3 << "," << r.rss << "," << r.landmarks << "\n";
+    const double fin = rows.empty() ? std::nan("") : rows.back().err;
+    md << "| " << toString(m) << " | " << minutes << " | " << static_cast<int>(dist) << " | " << fin << " | "
+       << 100.0 * fin / std::max(1.0, dist) << " | " << max_lm << " | " << rss0 << " | "
+       << (rows.empty() ? rss0 : rows.back().rss) << " | " << nonfinite << " | " << static_cast<int>(wall) << " |\n";
+    std::fprintf(stderr, "%s: %.0f m, final error %.2f m, RSS %.1f -> %.1f MB, %d non-finite, %.0f s\n",
+                 toString(m).c_str(), dist, fin, rss0, rows.empty() ? rss0 : rows.back().rss, nonfinite, wall);
+    all_finite = all_finite && nonfinite == 0;
+  }
+  std::ofstream(fs::path(out) / "summary.md") << md.str();
+  std::cout << md.str() << "\nwritten to " << out << "\n";
+  return all_finite ? 0 : 1;
+}
