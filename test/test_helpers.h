@@ -78,8 +78,8 @@ inline FilterState randomState(Mechanization m, int N, std::mt19937_64& rng) {
 }
 
 /// Central differences of f around zero: column j = (f(+e_j h) - f(-e_j h)) / 2h.
-inline Eigen::MatrixXd numericJacobian(const std::function<Eigen::VectorXd(const Eigen::VectorXd&)>& f,
-                                       int in_dim, double h = 1e-6) {
+inline Eigen::MatrixXd numericJacobian(const std::function<Eigen::VectorXd(const Eigen::VectorXd&)>& f, int in_dim,
+                                       double h = 1e-6) {
   const Eigen::VectorXd f0 = f(Eigen::VectorXd::Zero(in_dim));
   Eigen::MatrixXd J(f0.size(), in_dim);
   for (int j = 0; j < in_dim; ++j) {

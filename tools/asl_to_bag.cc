@@ -19,9 +19,12 @@ int main(int argc, char** argv) {
   double margin = 1.0;
   for (int i = 1; i + 1 < argc; i += 2) {
     const std::string k = argv[i];
-    if (k == "--asl") asl = argv[i + 1];
-    else if (k == "--out") out = argv[i + 1];
-    else if (k == "--imu-margin") margin = std::stod(argv[i + 1]);
+    if (k == "--asl")
+      asl = argv[i + 1];
+    else if (k == "--out")
+      out = argv[i + 1];
+    else if (k == "--imu-margin")
+      margin = std::stod(argv[i + 1]);
   }
   if (asl.empty() || out.empty()) {
     std::cerr << "usage: vi_ekf_slam_asl_to_bag --asl FOLDER/mav0 --out FILE [--imu-margin S]\n";

@@ -23,12 +23,18 @@ int main(int argc, char** argv) {
   int seed = 1, blur = 1;
   for (int i = 1; i + 1 < argc; i += 2) {
     const std::string k = argv[i], v = argv[i + 1];
-    if (k == "--out") out = v;
-    else if (k == "--trajectory") trajectory = v;
-    else if (k == "--duration") duration = std::stod(v);
-    else if (k == "--standing") standing = std::stod(v);
-    else if (k == "--seed") seed = std::stoi(v);
-    else if (k == "--blur") blur = std::stoi(v);
+    if (k == "--out")
+      out = v;
+    else if (k == "--trajectory")
+      trajectory = v;
+    else if (k == "--duration")
+      duration = std::stod(v);
+    else if (k == "--standing")
+      standing = std::stod(v);
+    else if (k == "--seed")
+      seed = std::stoi(v);
+    else if (k == "--blur")
+      blur = std::stoi(v);
     else {
       std::cerr << "unknown option " << k << "\n";
       return 2;

@@ -84,11 +84,14 @@ eval::RunMetrics evaluateRecording(const std::string& path, const glue::InputBag
   rosbag::Bag bag(path, rosbag::bagmode::Read);
   std::map<std::int64_t, eval::EstimatedLandmark> last_cloud;
   for (const rosbag::MessageInstance& m : rosbag::View(bag)) {
-    if (auto o = m.instantiate<nav_msgs::Odometry>()) sink.odometry(*o);
-    else if (auto s = m.instantiate<vi_ekf_slam::FilterStatus>()) sink.status(*s);
+    if (auto o = m.instantiate<nav_msgs::Odometry>())
+      sink.odometry(*o);
+    else if (auto s = m.instantiate<vi_ekf_slam::FilterStatus>())
+      sink.status(*s);
     else if (auto c = m.instantiate<sensor_msgs::PointCloud2>()) {
       last_cloud.clear();
-      sensor_msgs::PointCloud2ConstIterator<float> x(*c, "x"), y(*c, "y"), z(*c, "z"), u(*c, "birth_u"), v(*c, "birth_v");
+      sensor_msgs::PointCloud2ConstIterator<float> x(*c, "x"), y(*c, "y"), z(*c, "z"), u(*c, "birth_u"),
+          v(*c, "birth_v");
       sensor_msgs::PointCloud2ConstIterator<uint32_t> id(*c, "id");
       sensor_msgs::PointCloud2ConstIterator<double> bt(*c, "birth_time");
       for (; x != x.end(); ++x, ++y, ++z, ++u, ++v, ++id, ++bt) {
@@ -127,11 +130,14 @@ int main(int argc, char** argv) {
   }
   const std::string bag_path = args["bag"];
   const std::string out = args.count("out") ? args["out"] : "results/run_bag/" + fs::path(bag_path).stem().string();
-  const std::string config = args.count("config") ? args["config"] : std::string(VI_EKF_SLAM_SOURCE_DIR) + "/config/vi_ekf_slam.yaml";
+  const std::string config =
+      args.count("config") ? args["config"] : std::string(VI_EKF_SLAM_SOURCE_DIR) + "/config/vi_ekf_slam.yaml";
   std::vector<std::string> mechanizations;
   const std::string mech = args.count("mechanization") ? args["mechanization"] : "";
-  if (mech == "all") mechanizations = {"world_centric", "sensor_centric", "sensor_centric_composition"};
-  else mechanizations = {mech};
+  if (mech == "all")
+    mechanizations = {"world_centric", "sensor_centric", "sensor_centric_composition"};
+  else
+    mechanizations = {mech};
 
   glue::InputBagInfo info;
   try {
@@ -157,7 +163,8 @@ int main(int argc, char** argv) {
         std::cerr << "error: " << item.substr(eq + 1) << ": " << e.what() << "\n";
         return 1;
       }
-      std::printf("%s: %d poses, %.1f tracks per frame\n", item.substr(0, eq).c_str(), results.back().second.frames, tracks);
+      std::printf("%s: %d poses, %.1f tracks per frame\n", item.substr(0, eq).c_str(), results.back().second.frames,
+                  tracks);
     }
     mechanizations.clear();
   }
@@ -189,9 +196,12 @@ int main(int argc, char** argv) {
     const auto tic = std::chrono::steady_clock::now();
     for (const rosbag::MessageInstance& msg : view) {
       const std::string& topic = msg.getTopic();
-      if (auto imu = msg.instantiate<sensor_msgs::Imu>()) processor.imu(*imu);
-      else if (auto img = msg.instantiate<sensor_msgs::Image>()) processor.image(*img);
-      else if (auto ci = msg.instantiate<sensor_msgs::CameraInfo>()) processor.cameraInfo(*ci);
+      if (auto imu = msg.instantiate<sensor_msgs::Imu>())
+        processor.imu(*imu);
+      else if (auto img = msg.instantiate<sensor_msgs::Image>())
+        processor.image(*img);
+      else if (auto ci = msg.instantiate<sensor_msgs::CameraInfo>())
+        processor.cameraInfo(*ci);
       else if (topic == "/tf_static" || topic == "/tf") {
         if (auto t = msg.instantiate<tf2_msgs::TFMessage>()) {
           for (const auto& tr : t->transforms) tf.setTransform(tr, "bag", topic == "/tf_static");
@@ -213,10 +223,11 @@ int main(int argc, char** argv) {
       mean_tracks += static_cast<double>(t) / sink.tracks.size();
       min_tracks = std::min(min_tracks, t);
     }
-    std::printf("%s: %zu poses, %d resets, tracks per frame %.1f (min %d), %.1f s of data in %.1f s (%.1fx real time), "
-                "ATE %.3f m, final %.3f m (%.2f%%)\n",
-                name.c_str(), sink.poses.size(), sink.resets, mean_tracks, min_tracks, bag_s, wall, bag_s / wall,
-                metrics.ate_position_m, metrics.final_position_error_m, metrics.final_position_error_pct);
+    std::printf(
+        "%s: %zu poses, %d resets, tracks per frame %.1f (min %d), %.1f s of data in %.1f s (%.1fx real time), "
+        "ATE %.3f m, final %.3f m (%.2f%%)\n",
+        name.c_str(), sink.poses.size(), sink.resets, mean_tracks, min_tracks, bag_s, wall, bag_s / wall,
+        metrics.ate_position_m, metrics.final_position_error_m, metrics.final_position_error_pct);
     metrics.real_time_factor = bag_s / wall;  // offline: the whole pipeline, bag reading included
     results.emplace_back(name, metrics);
   }
@@ -228,7 +239,8 @@ int main(int argc, char** argv) {
   std::cout << "\n" << md.rdbuf() << "\nwritten to " << out << "\n";
   if (!args.count("plots") || args["plots"] != "false") {
     // The study's plots (top view, errors with 3-sigma, NEES) with Debian's Python (matplotlib).
-    const std::string cmd = "/usr/bin/python3 '" + std::string(VI_EKF_SLAM_SOURCE_DIR) + "/tools/plot_run.py' '" + out + "'";
+    const std::string cmd =
+        "/usr/bin/python3 '" + std::string(VI_EKF_SLAM_SOURCE_DIR) + "/tools/plot_run.py' '" + out + "'";
     if (std::system(cmd.c_str()) != 0) std::cerr << "warning: plotting failed: " << cmd << "\n";
   }
   return 0;

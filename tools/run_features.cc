@@ -28,8 +28,10 @@ int main(int argc, char** argv) {
   std::string out = "results/run_features";
   for (int i = 1; i + 1 < argc; i += 2) {
     const std::string k = argv[i];
-    if (k == "--data") data_dir = argv[i + 1];
-    else if (k == "--out") out = argv[i + 1];
+    if (k == "--data")
+      data_dir = argv[i + 1];
+    else if (k == "--out")
+      out = argv[i + 1];
   }
   eval::FeatureTrackData data;
   std::vector<eval::StampedPose> truth;
@@ -44,13 +46,13 @@ int main(int argc, char** argv) {
   std::printf("EqVIO tracks: %zu IMU samples, %zu frames\n", data.imu.size(), data.frames.size());
   std::vector<std::pair<std::string, eval::RunMetrics>> results;
   for (auto init : {LandmarkInitMethod::kFixedDepth, LandmarkInitMethod::kInverseDepth}) {
-    for (auto m : {Mechanization::kWorldCentric, Mechanization::kSensorCentric,
-                   Mechanization::kSensorCentricComposition}) {
+    for (auto m :
+         {Mechanization::kWorldCentric, Mechanization::kSensorCentric, Mechanization::kSensorCentricComposition}) {
       EkfSlamConfig c = euroFeatureConfig();
       c.mechanization = m;
       c.landmark_init = init;
-      c.composition_trigger =
-          init == LandmarkInitMethod::kFixedDepth ? CompositionTrigger::kNewLandmarks : CompositionTrigger::kEveryUpdate;
+      c.composition_trigger = init == LandmarkInitMethod::kFixedDepth ? CompositionTrigger::kNewLandmarks
+                                                                      : CompositionTrigger::kEveryUpdate;
       StaticInitParams s;
       s.gravity_mps2 = c.gravity_mps2;
       const auto r = eval::replayFeatures(data, truth, c, s);

@@ -16,22 +16,20 @@ int main(int argc, char** argv) {
               duration, seed);
   std::printf("%-28s %9s %9s %9s | %9s %9s %9s | %8s %8s %6s %6s\n", "mechanization", "est x", "est y", "est z",
               "true x", "true y", "true z", "pos err", "yaw err", "lmks", "comp");
-  for (auto m : {Mechanization::kWorldCentric, Mechanization::kSensorCentric,
-                 Mechanization::kSensorCentricComposition}) {
+  for (auto m :
+       {Mechanization::kWorldCentric, Mechanization::kSensorCentric, Mechanization::kSensorCentricComposition}) {
     EkfSlamConfig cfg;
     cfg.mechanization = m;
     cfg.imu_noise = sc.imu.noise;
     std::mt19937_64 rng(seed);
     int compositions = 0;
-    const sim::SimRun run = sim::runSimulation(
-        sc, cfg, sim::trueNavState(*sc.trajectory, 0.0), rng,
-        [&](EkfSlam& f, sim::FrameRecord&) { compositions = f.compositions(); });
+    const sim::SimRun run = sim::runSimulation(sc, cfg, sim::trueNavState(*sc.trajectory, 0.0), rng,
+                                               [&](EkfSlam& f, sim::FrameRecord&) { compositions = f.compositions(); });
     const auto& last = run.frames.back();
     const Vec3 e = last.estimate.p_n_b, t = last.truth.p_n_b;
     const double yaw_err = rotationError(last.estimate.q_n_b, last.truth.q_n_b).z() * 180.0 / M_PI;
-    std::printf("%-28s %9.3f %9.3f %9.3f | %9.3f %9.3f %9.3f | %7.3fm %7.2fd %6d %6d\n", toString(m).c_str(),
-                e.x(), e.y(), e.z(), t.x(), t.y(), t.z(), (e - t).norm(), yaw_err, last.landmarks_in_state,
-                compositions);
+    std::printf("%-28s %9.3f %9.3f %9.3f | %9.3f %9.3f %9.3f | %7.3fm %7.2fd %6d %6d\n", toString(m).c_str(), e.x(),
+                e.y(), e.z(), t.x(), t.y(), t.z(), (e - t).norm(), yaw_err, last.landmarks_in_state, compositions);
   }
   return 0;
 }

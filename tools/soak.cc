@@ -45,17 +45,22 @@ int main(int argc, char** argv) {
   std::uint64_t seed = 1;
   for (int i = 1; i + 1 < argc; i += 2) {
     const std::string k = argv[i], v = argv[i + 1];
-    if (k == "--minutes") minutes = std::stod(v);
-    else if (k == "--out") out = v;
-    else if (k == "--mechanizations") which = v;
-    else if (k == "--seed") seed = std::stoull(v);
+    if (k == "--minutes")
+      minutes = std::stod(v);
+    else if (k == "--out")
+      out = v;
+    else if (k == "--mechanizations")
+      which = v;
+    else if (k == "--seed")
+      seed = std::stoull(v);
     else {
       std::cerr << "unknown option " << k << "\n";
       return 2;
     }
   }
   std::vector<Mechanization> mechs;
-  for (auto m : {Mechanization::kWorldCentric, Mechanization::kSensorCentric, Mechanization::kSensorCentricComposition}) {
+  for (auto m :
+       {Mechanization::kWorldCentric, Mechanization::kSensorCentric, Mechanization::kSensorCentricComposition}) {
     if (which == "all" || which.find(toString(m)) != std::string::npos) mechs.push_back(m);
   }
   sim::HallwayParams gait;
@@ -80,25 +85,29 @@ int main(int argc, char** argv) {
     const auto tic = std::chrono::steady_clock::now();
     double rss0 = 0.0;  // after the IMU stream was synthesized and the first image processed
     std::mt19937_64 rng(seed);
-    const NavState init = sim::drawInitialEstimate(sim::trueNavState(*sc.trajectory, sc.trajectory->startTime()),
-                                                   c.initial, rng);
+    const NavState init =
+        sim::drawInitialEstimate(sim::trueNavState(*sc.trajectory, sc.trajectory->startTime()), c.initial, rng);
     int frame = 0;
-    sim::runSimulation(sc, c, init, rng, [&](EkfSlam& f, sim::FrameRecord& rec) {
-      const NavState& n = rec.estimate;
-      if (!n.p_n_b.allFinite() || !n.cov.allFinite()) ++nonfinite;
-      if (frame > 0) dist += (rec.truth.p_n_b - last_true).norm();
-      last_true = rec.truth.p_n_b;
-      max_lm = std::max(max_lm, f.state().numLandmarks());
-      if (frame == 0) rss0 = rssMb();
-      if (frame++ % 28 == 0) {
-        const double sigma = std::sqrt(n.cov.block<3, 3>(0, 0).trace());
-        rows.push_back({rec.t, (rec.truth.p_n_b - n.p_n_b).norm(), 3.0 * sigma, rssMb(), f.state().numLandmarks()});
-      }
-    }, /*keep_frames=*/false);
+    sim::runSimulation(
+        sc, c, init, rng,
+        [&](EkfSlam& f, sim::FrameRecord& rec) {
+          const NavState& n = rec.estimate;
+          if (!n.p_n_b.allFinite() || !n.cov.allFinite()) ++nonfinite;
+          if (frame > 0) dist += (rec.truth.p_n_b - last_true).norm();
+          last_true = rec.truth.p_n_b;
+          max_lm = std::max(max_lm, f.state().numLandmarks());
+          if (frame == 0) rss0 = rssMb();
+          if (frame++ % 28 == 0) {
+            const double sigma = std::sqrt(n.cov.block<3, 3>(0, 0).trace());
+            rows.push_back({rec.t, (rec.truth.p_n_b - n.p_n_b).norm(), 3.0 * sigma, rssMb(), f.state().numLandmarks()});
+          }
+        },
+        /*keep_frames=*/false);
     const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - tic).count();
     std::ofstream csv(fs::path(out) / (toString(m) + ".csv"));
     csv << "t,position_error_m,sigma3_m,rss_mb,landmarks\n";
-    for (const Row& r : rows) csv << r.t << "," << r.err << "," << r.sigma3 << "," << r.rss << "," << r.landmarks << "\n";
+    for (const Row& r : rows)
+      csv << r.t << "," << r.err << "," << r.sigma3 << "," << r.rss << "," << r.landmarks << "\n";
     const double fin = rows.empty() ? std::nan("") : rows.back().err;
     md << "| " << toString(m) << " | " << minutes << " | " << static_cast<int>(dist) << " | " << fin << " | "
        << 100.0 * fin / std::max(1.0, dist) << " | " << max_lm << " | " << rss0 << " | "

@@ -40,9 +40,9 @@ struct Options {
   std::string out = "results/study";
   std::string configs = "all";
   int threads = static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
-  double density = 1.0;    // landmarks per m^2 of wall (built-in walk)
-  double per_metre = 15.0; // landmarks per metre of path (TUM trajectories)
-  double max_duration = 0; // truncate TUM trajectories [s], 0 = whole file
+  double density = 1.0;     // landmarks per m^2 of wall (built-in walk)
+  double per_metre = 15.0;  // landmarks per metre of path (TUM trajectories)
+  double max_duration = 0;  // truncate TUM trajectories [s], 0 = whole file
   std::string imu;          // recorded IMU (ASL imu0/data.csv) instead of a synthesized one
   std::string imu_noise = "datasheet";
 };
@@ -62,18 +62,30 @@ Options parse(int argc, char** argv) {
     if (i + 1 >= argc) usage("missing value for " + k);
     const std::string v = argv[++i];
     try {
-      if (k == "--trajectory") o.trajectory = v;
-      else if (k == "--runs") o.runs = std::stoi(v);
-      else if (k == "--seed") o.seed = std::stoull(v);
-      else if (k == "--out") o.out = v;
-      else if (k == "--configs") o.configs = v;
-      else if (k == "--threads") o.threads = std::stoi(v);
-      else if (k == "--density") o.density = std::stod(v);
-      else if (k == "--per-metre") o.per_metre = std::stod(v);
-      else if (k == "--max-duration") o.max_duration = std::stod(v);
-      else if (k == "--imu") o.imu = v;
-      else if (k == "--imu-noise") o.imu_noise = v;
-      else usage("unknown option " + k);
+      if (k == "--trajectory")
+        o.trajectory = v;
+      else if (k == "--runs")
+        o.runs = std::stoi(v);
+      else if (k == "--seed")
+        o.seed = std::stoull(v);
+      else if (k == "--out")
+        o.out = v;
+      else if (k == "--configs")
+        o.configs = v;
+      else if (k == "--threads")
+        o.threads = std::stoi(v);
+      else if (k == "--density")
+        o.density = std::stod(v);
+      else if (k == "--per-metre")
+        o.per_metre = std::stod(v);
+      else if (k == "--max-duration")
+        o.max_duration = std::stod(v);
+      else if (k == "--imu")
+        o.imu = v;
+      else if (k == "--imu-noise")
+        o.imu_noise = v;
+      else
+        usage("unknown option " + k);
     } catch (const std::logic_error&) {
       usage("bad value '" + v + "' for " + k);
     }
@@ -108,13 +120,13 @@ std::vector<std::pair<std::string, EkfSlamConfig>> makeConfigs(const Options& o,
   };
   const auto fixed = LandmarkInitMethod::kFixedDepth, inv = LandmarkInitMethod::kInverseDepth;
   const auto paper = CompositionTrigger::kNewLandmarks, every = CompositionTrigger::kEveryUpdate;
-  for (auto m : {Mechanization::kWorldCentric, Mechanization::kSensorCentric,
-                 Mechanization::kSensorCentricComposition}) {
+  for (auto m :
+       {Mechanization::kWorldCentric, Mechanization::kSensorCentric, Mechanization::kSensorCentricComposition}) {
     add(m, fixed, paper);
   }
   if (o.configs == "paper") return all;
-  for (auto m : {Mechanization::kWorldCentric, Mechanization::kSensorCentric,
-                 Mechanization::kSensorCentricComposition}) {
+  for (auto m :
+       {Mechanization::kWorldCentric, Mechanization::kSensorCentric, Mechanization::kSensorCentricComposition}) {
     add(m, inv, paper);
   }
   add(Mechanization::kSensorCentricComposition, fixed, every);
@@ -159,8 +171,10 @@ void writeConfigFiles(const fs::path& dir, const sim::ConsistencySummary& s, con
     writeCsvRow(r, {m.p_true, m.p_est, m.p_true});
     writeCsvRow(r, {m.e_p, m.s_p, m.e_q, m.s_q, m.e_v, m.s_v, m.e_ba, m.s_ba, m.e_bg, m.s_bg});
     const Vec3 z = Vec3::Zero();
-    if (m.has_s) writeCsvRow(r, {m.e_p_sb, m.s_p_sb, m.e_q_sb, m.s_q_sb, m.e_p_ns, m.s_p_ns, m.e_q_ns, m.s_q_ns});
-    else writeCsvRow(r, {z, z, z, z, z, z, z, z});
+    if (m.has_s)
+      writeCsvRow(r, {m.e_p_sb, m.s_p_sb, m.e_q_sb, m.s_q_sb, m.e_p_ns, m.s_p_ns, m.e_q_ns, m.s_q_ns});
+    else
+      writeCsvRow(r, {z, z, z, z, z, z, z, z});
     r << "," << m.has_s << "," << m.gamma << "," << m.landmarks << "," << m.new_landmarks << "," << m.rejected << ","
       << m.composed << "," << m.nees_pose << "," << m.update_ms << "\n";
   }
@@ -203,8 +217,8 @@ int main(int argc, char** argv) {
     return 1;
   }
   if (o.max_duration > 0.0) {
-    sc.trajectory = std::make_shared<sim::TruncatedTrajectory>(sc.trajectory,
-                                                                 sc.trajectory->startTime() + o.max_duration);
+    sc.trajectory =
+        std::make_shared<sim::TruncatedTrajectory>(sc.trajectory, sc.trajectory->startTime() + o.max_duration);
   }
   const auto configs = makeConfigs(o, sc);
   const double duration = sc.trajectory->endTime() - std::max(0.0, sc.trajectory->startTime());
@@ -213,7 +227,8 @@ int main(int argc, char** argv) {
 
   // All (configuration, run) jobs on a small thread pool. Run r uses seed + r for every
   // configuration (common random numbers: the same noise for each filter).
-  std::vector<std::vector<sim::RunResult>> results(configs.size(), std::vector<sim::RunResult>(static_cast<size_t>(o.runs)));
+  std::vector<std::vector<sim::RunResult>> results(configs.size(),
+                                                   std::vector<sim::RunResult>(static_cast<size_t>(o.runs)));
   std::atomic<int> next{0};
   std::mutex print_mutex;
   const int jobs = static_cast<int>(configs.size()) * o.runs;
@@ -247,29 +262,30 @@ int main(int argc, char** argv) {
   // summary.json: each configuration name -> metrics, plus the settings used.
   std::ofstream js(out / "summary.json");
   js << "{\n  \"config\": {\"trajectory\": \"" << traj_name << "\", \"seed\": " << o.seed << ", \"runs\": " << o.runs
-     << ", \"recorded_imu\": \"" << o.imu << "\", \"imu_noise\": \"" << o.imu_noise << "\", \"duration_s\": " << jsonNumber(duration) << ", \"world_landmarks\": " << sc.world.size()
+     << ", \"recorded_imu\": \"" << o.imu << "\", \"imu_noise\": \"" << o.imu_noise
+     << "\", \"duration_s\": " << jsonNumber(duration) << ", \"world_landmarks\": " << sc.world.size()
      << ", \"imu_rate_hz\": " << sc.imu.rate_hz << ", \"camera_rate_hz\": " << sc.cam.rate_hz
      << ", \"pixel_noise_px\": " << sc.cam.pixel_noise_px
      << ", \"accel_noise_density\": " << jsonNumber(sc.imu.noise.accel_noise_density)
      << ", \"gyro_noise_density\": " << jsonNumber(sc.imu.noise.gyro_noise_density)
      << ", \"accel_random_walk\": " << jsonNumber(sc.imu.noise.accel_random_walk)
-     << ", \"gyro_random_walk\": " << jsonNumber(sc.imu.noise.gyro_random_walk)
-     << ", \"pose_nees_band\": [" << jsonNumber(sums[0].pose_band.lo) << ", " << jsonNumber(sums[0].pose_band.hi) << "]}";
+     << ", \"gyro_random_walk\": " << jsonNumber(sc.imu.noise.gyro_random_walk) << ", \"pose_nees_band\": ["
+     << jsonNumber(sums[0].pose_band.lo) << ", " << jsonNumber(sums[0].pose_band.hi) << "]}";
   for (size_t c = 0; c < sums.size(); ++c) {
     const auto& s = sums[c];
     const auto& cfg = configs[c].second;
     js << ",\n  \"" << s.name << "\": {\"mechanization\": \"" << toString(cfg.mechanization)
        << "\", \"landmark_init\": \"" << toString(cfg.landmark_init) << "\", \"composition_trigger\": \""
-       << toString(cfg.composition_trigger) << "\", \"ate_position_m\": "
-       << jsonNumber(s.ate_position_m) << ", \"ate_orientation_deg\": " << jsonNumber(s.ate_orientation_deg)
+       << toString(cfg.composition_trigger) << "\", \"ate_position_m\": " << jsonNumber(s.ate_position_m)
+       << ", \"ate_orientation_deg\": " << jsonNumber(s.ate_orientation_deg)
        << ", \"final_position_error_m\": " << jsonNumber(s.final_position_error_m)
        << ", \"final_position_error_pct\": " << jsonNumber(s.final_position_error_pct)
        << ", \"distance_m\": " << jsonNumber(s.distance_m) << ", \"nees_position\": " << jsonNumber(s.nees_position)
        << ", \"nees_orientation\": " << jsonNumber(s.nees_orientation) << ", \"nees_pose\": " << jsonNumber(s.nees_pose)
        << ", \"consistent_fraction\": " << jsonNumber(s.consistent_fraction)
        << ", \"final_scale_ratio\": " << jsonNumber(s.final_scale_ratio) << ", \"runs\": " << s.runs
-       << ", \"filter_ms_mean\": " << jsonNumber(s.mean_update_ms) << ", \"filter_ms_p95\": " << jsonNumber(s.p95_update_ms)
-       << "}";
+       << ", \"filter_ms_mean\": " << jsonNumber(s.mean_update_ms)
+       << ", \"filter_ms_p95\": " << jsonNumber(s.p95_update_ms) << "}";
   }
   js << "\n}\n";
 
@@ -278,7 +294,8 @@ int main(int argc, char** argv) {
      << std::setprecision(1) << duration << " s, " << sums[0].distance_m << " m)\n\n"
      << "Pose NEES 95% band for the run average: [" << std::setprecision(2) << sums[0].pose_band.lo << ", "
      << sums[0].pose_band.hi << "] (6 dof).\n\n"
-     << "| configuration | ATE pos [m] | ATE rot [deg] | final err [m] | final err [%] | NEES pos | NEES rot | NEES pose "
+     << "| configuration | ATE pos [m] | ATE rot [deg] | final err [m] | final err [%] | NEES pos | NEES rot | NEES "
+        "pose "
         "| consistent | final gamma | filter [ms] |\n"
      << "|---|---|---|---|---|---|---|---|---|---|---|\n";
   for (const auto& s : sums) {

@@ -18,8 +18,8 @@ std::string CameraIntrinsics::validate() const {
   for (double d : distortion) {
     if (!std::isfinite(d)) err << "non-finite distortion coefficient; ";
   }
-  if (model == DistortionModel::kRadTan && !(distortion.size() == 4 || distortion.size() == 5 ||
-                                              distortion.size() == 8 || distortion.empty())) {
+  if (model == DistortionModel::kRadTan &&
+      !(distortion.size() == 4 || distortion.size() == 5 || distortion.size() == 8 || distortion.empty())) {
     err << "plumb_bob needs 4 or 5 coefficients (k1 k2 p1 p2 [k3]); ";
   }
   if (model == DistortionModel::kEquidistant && distortion.size() != 4) {
@@ -51,8 +51,8 @@ Eigen::Vector2d CameraModel::distort(const Eigen::Vector2d& xn, Eigen::Matrix2d*
       const double r2 = x * x + y * y;
       const double radial = 1.0 + r2 * (k1 + r2 * (k2 + r2 * k3));
       const double dradial = k1 + r2 * (2.0 * k2 + 3.0 * k3 * r2);  // d(radial)/d(r2)
-      const Eigen::Vector2d xd(x * radial + 2.0 * p1 * x * y + p2 * (r2 + 2.0 * x * x),
-                               y * radial + p1 * (r2 + 2.0 * y * y) + 2.0 * p2 * x * y);
+      Eigen::Vector2d xd(x * radial + 2.0 * p1 * x * y + p2 * (r2 + 2.0 * x * x),
+                         y * radial + p1 * (r2 + 2.0 * y * y) + 2.0 * p2 * x * y);
       if (J) {
         const double cross = 2.0 * x * y * dradial + 2.0 * p1 * x + 2.0 * p2 * y;
         *J << radial + 2.0 * x * x * dradial + 2.0 * p1 * y + 6.0 * p2 * x, cross, cross,
@@ -70,8 +70,7 @@ Eigen::Vector2d CameraModel::distort(const Eigen::Vector2d& xn, Eigen::Matrix2d*
       const double thd = th * (1.0 + t2 * (k_[0] + t2 * (k_[1] + t2 * (k_[2] + t2 * k_[3]))));
       const double s = thd / r;
       if (J) {
-        const double dthd_dth =
-            1.0 + t2 * (3.0 * k_[0] + t2 * (5.0 * k_[1] + t2 * (7.0 * k_[2] + t2 * 9.0 * k_[3])));
+        const double dthd_dth = 1.0 + t2 * (3.0 * k_[0] + t2 * (5.0 * k_[1] + t2 * (7.0 * k_[2] + t2 * 9.0 * k_[3])));
         const double ds_dr = (dthd_dth / (1.0 + r * r) * r - thd) / (r * r);
         *J = s * Eigen::Matrix2d::Identity() + ds_dr * xn * xn.transpose() / r;
       }
@@ -91,8 +90,7 @@ Eigen::Vector2d CameraModel::normalizedToPixel(const Eigen::Vector2d& xn, Eigen:
   return {intr_.fx * xd.x() + intr_.cx, intr_.fy * xd.y() + intr_.cy};
 }
 
-bool CameraModel::pixelToNormalized(const Eigen::Vector2d& uv, Eigen::Vector2d* xn,
-                                    Eigen::Matrix2d* J) const {
+bool CameraModel::pixelToNormalized(const Eigen::Vector2d& uv, Eigen::Vector2d* xn, Eigen::Matrix2d* J) const {
   const Eigen::Vector2d xd((uv.x() - intr_.cx) / intr_.fx, (uv.y() - intr_.cy) / intr_.fy);
   // Gauss-Newton on distort(x) = xd with the analytic Jacobian, so the inverse is exactly
   // consistent with the forward model (OpenCV's fixed-point undistortion stops after a few
@@ -123,8 +121,7 @@ bool CameraModel::pixelToNormalized(const Eigen::Vector2d& uv, Eigen::Vector2d* 
   return true;
 }
 
-bool CameraModel::project(const Eigen::Vector3d& p_c, Eigen::Vector2d* uv,
-                          Eigen::Matrix<double, 2, 3>* J) const {
+bool CameraModel::project(const Eigen::Vector3d& p_c, Eigen::Vector2d* uv, Eigen::Matrix<double, 2, 3>* J) const {
   if (!(p_c.z() > 1e-6)) return false;
   const double iz = 1.0 / p_c.z();
   const Eigen::Vector2d xn(p_c.x() * iz, p_c.y() * iz);

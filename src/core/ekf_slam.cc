@@ -19,8 +19,8 @@ EkfSlam::EkfSlam(const EkfSlamConfig& config, const CameraModel& camera, const C
     throw std::invalid_argument("EkfSlam: invalid camera: " + camera_.intrinsics().validate());
   }
   const Mat3 RtR = T_b_c_.R_b_c.transpose() * T_b_c_.R_b_c;
-  if (!T_b_c_.R_b_c.allFinite() || !T_b_c_.p_b_c.allFinite() ||
-      (RtR - Mat3::Identity()).norm() > 1e-6 || T_b_c_.R_b_c.determinant() < 0.0) {
+  if (!T_b_c_.R_b_c.allFinite() || !T_b_c_.p_b_c.allFinite() || (RtR - Mat3::Identity()).norm() > 1e-6 ||
+      T_b_c_.R_b_c.determinant() < 0.0) {
     throw std::invalid_argument("EkfSlam: camera-IMU rotation R_b_c is not a rotation");
   }
   g_n_ = gravityInNav(config_.gravity_mps2);
@@ -50,8 +50,8 @@ void EkfSlam::initialize(const NavState& init) {
   P.block<3, 3>(kP, kP).diagonal().setConstant(u.position_m * u.position_m);
   P.block<3, 3>(kV, kV).diagonal().setConstant(u.velocity_mps * u.velocity_mps);
   P.block<3, 3>(kBa, kBa).diagonal().setConstant(u.accel_bias_mps2 * u.accel_bias_mps2);
-  P.block<3, 3>(kPsi, kPsi).diagonal() << u.roll_pitch_rad * u.roll_pitch_rad,
-      u.roll_pitch_rad * u.roll_pitch_rad, u.yaw_rad * u.yaw_rad;
+  P.block<3, 3>(kPsi, kPsi).diagonal() << u.roll_pitch_rad * u.roll_pitch_rad, u.roll_pitch_rad * u.roll_pitch_rad,
+      u.yaw_rad * u.yaw_rad;
   P.block<3, 3>(kBg, kBg).diagonal().setConstant(u.gyro_bias_radps * u.gyro_bias_radps);
   s.setCovariance(P);
   // Sensor-centric: {s} := initial body frame; the pose in {s} is exact and the registration
@@ -203,8 +203,8 @@ FrameResult EkfSlam::processFrame(const CameraFrame& frame) {
     }
   }
   const int wanted = static_cast<int>(fresh.size());
-  while (state_.numLandmarks() - static_cast<int>(drop.size()) + wanted > config_.max_landmarks &&
-         k < by_age.size() && by_age[k].first < frame.timestamp) {
+  while (state_.numLandmarks() - static_cast<int>(drop.size()) + wanted > config_.max_landmarks && k < by_age.size() &&
+         by_age[k].first < frame.timestamp) {
     drop.push_back(by_age[k++].second);
   }
   removeLandmarksById(drop);
@@ -241,8 +241,10 @@ bool EkfSlam::setConfig(const EkfSlamConfig& config, std::string* error) {
 
 void EkfSlam::setMechanization(Mechanization m) {
   config_.mechanization = m;
-  if (initialized_) switchMechanization(state_, m);
-  else state_ = FilterState(m);
+  if (initialized_)
+    switchMechanization(state_, m);
+  else
+    state_ = FilterState(m);
 }
 
 void EkfSlam::composeNow() {

@@ -18,8 +18,7 @@ struct AcceptedObservation {
 }  // namespace
 
 UpdateResult ekfUpdate(FilterState& state, const std::vector<FeatureObservation>& observations,
-                       const CameraModel& camera, const CameraExtrinsics& T_b_c,
-                       const UpdateParams& params) {
+                       const CameraModel& camera, const CameraExtrinsics& T_b_c, const UpdateParams& params) {
   UpdateResult result;
   const double r_var = params.pixel_noise_px * params.pixel_noise_px;
   const double gate = chiSquaredQuantile(params.gate_probability, 2.0);
@@ -32,8 +31,7 @@ UpdateResult ekfUpdate(FilterState& state, const std::vector<FeatureObservation>
     const auto li = state.findLandmark(obs.id);
     Eigen::Vector2d uv;
     AcceptedObservation a;
-    if (!li || !obs.uv.allFinite() ||
-        !predictObservation(state.x, state.landmark(*li), camera, T_b_c, &uv, &a.J)) {
+    if (!li || !obs.uv.allFinite() || !predictObservation(state.x, state.landmark(*li), camera, T_b_c, &uv, &a.J)) {
       result.invalid_ids.push_back(obs.id);
       continue;
     }

@@ -49,7 +49,8 @@ cv::Point2f FeatureTracker::predict(const cv::Point2f& uv, const Eigen::Matrix3d
   return {static_cast<float>(p.x()), static_cast<float>(p.y())};
 }
 
-CameraFrame FeatureTracker::track(double timestamp, const cv::Mat& img, const std::optional<Eigen::Matrix3d>& R_cur_prev) {
+CameraFrame FeatureTracker::track(double timestamp, const cv::Mat& img,
+                                  const std::optional<Eigen::Matrix3d>& R_cur_prev) {
   CV_Assert(img.type() == CV_8UC1);
   stats_ = TrackerStats();
   const cv::Size win(params_.klt_window_px, params_.klt_window_px);
@@ -106,8 +107,10 @@ CameraFrame FeatureTracker::track(double timestamp, const cv::Mat& img, const st
       if (!F.empty() && inlier.size() == kept.size()) {
         std::vector<Track> in;
         for (size_t i = 0; i < kept.size(); ++i) {
-          if (inlier[i]) in.push_back(std::move(kept[i]));
-          else ++stats_.ransac_rejected;
+          if (inlier[i])
+            in.push_back(std::move(kept[i]));
+          else
+            ++stats_.ransac_rejected;
         }
         kept = std::move(in);
       }

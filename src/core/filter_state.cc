@@ -18,8 +18,8 @@ std::string toString(Mechanization m) {
 }
 
 std::optional<Mechanization> mechanizationFromString(const std::string& s) {
-  for (auto m : {Mechanization::kWorldCentric, Mechanization::kSensorCentric,
-                 Mechanization::kSensorCentricComposition}) {
+  for (auto m :
+       {Mechanization::kWorldCentric, Mechanization::kSensorCentric, Mechanization::kSensorCentricComposition}) {
     if (toString(m) == s) return m;
   }
   return std::nullopt;
@@ -27,8 +27,7 @@ std::optional<Mechanization> mechanizationFromString(const std::string& s) {
 
 FilterState::FilterState(Mechanization mechanization)
     : mechanization_(mechanization),
-      P_(Eigen::MatrixXd::Zero(vi_ekf_slam::motionDim(mechanization),
-                               vi_ekf_slam::motionDim(mechanization))) {}
+      P_(Eigen::MatrixXd::Zero(vi_ekf_slam::motionDim(mechanization), vi_ekf_slam::motionDim(mechanization))) {}
 
 void FilterState::setMechanizationTag(Mechanization m) {
   if (vi_ekf_slam::motionDim(m) != motionDim()) {

@@ -148,8 +148,8 @@ FrameChangeJacobian worldToSensorJacobian(const FilterState& s) {
   J.J_motion.block<3, 3>(kV, kPsi) = R.transpose() * skew(s.x.v_s_b);
   J.J_motion.block<3, 3>(kBa, kBa).setIdentity();
   J.J_motion.block<3, 3>(kBg, kBg).setIdentity();
-  J.J_motion.block<3, 3>(kPns, kP).setIdentity();       // p_n_s = p_n_b
-  J.J_motion.block<3, 3>(kPsiNs, kPsi).setIdentity();   // q_n_s = q_n_b
+  J.J_motion.block<3, 3>(kPns, kP).setIdentity();      // p_n_s = p_n_b
+  J.J_motion.block<3, 3>(kPsiNs, kPsi).setIdentity();  // q_n_s = q_n_b
   resetToBodyLandmarks(s, R, &J);
   return J;
 }

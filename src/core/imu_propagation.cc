@@ -9,8 +9,7 @@ Vec3 gravityInStrapdown(const MotionState& x, Mechanization m, const Vec3& g_n) 
 }
 }  // namespace
 
-void strapdownStep(MotionState& x, Mechanization m, const Vec3& wm, const Vec3& am, double dt,
-                   const Vec3& g_n) {
+void strapdownStep(MotionState& x, Mechanization m, const Vec3& wm, const Vec3& am, double dt, const Vec3& g_n) {
   const Vec3 w = wm - x.b_g;
   // eq. (8) / (21), with the specific force rotated by the attitude in the middle of the step
   // (second-order accurate; eq. 8 uses the attitude at its start).
@@ -21,8 +20,8 @@ void strapdownStep(MotionState& x, Mechanization m, const Vec3& wm, const Vec3& 
   x.q_s_b = (x.q_s_b * expQuat(w * dt)).normalized();  // eq. (9)
 }
 
-MotionMatrix transitionMatrix(const MotionState& x, Mechanization m, const Vec3& wm, const Vec3& am,
-                              double dt, const Vec3& g_n) {
+MotionMatrix transitionMatrix(const MotionState& x, Mechanization m, const Vec3& wm, const Vec3& am, double dt,
+                              const Vec3& g_n) {
   using namespace idx;
   const int n = motionDim(m);
   MotionMatrix Phi = MotionMatrix::Identity(n, n);
@@ -66,14 +65,13 @@ MotionVector continuousNoiseDiagonal(Mechanization m, const ImuNoiseParams& nois
   return q;
 }
 
-MotionMatrix discreteNoise(const MotionMatrix& Phi, Mechanization m, const ImuNoiseParams& noise,
-                           double dt) {
+MotionMatrix discreteNoise(const MotionMatrix& Phi, Mechanization m, const ImuNoiseParams& noise, double dt) {
   MotionMatrix Qd = Phi * continuousNoiseDiagonal(m, noise, dt).asDiagonal() * Phi.transpose();
   return 0.5 * (Qd + Qd.transpose());
 }
 
-void propagateState(FilterState& state, const Vec3& wm, const Vec3& am, double dt,
-                    const ImuNoiseParams& noise, const Vec3& g_n) {
+void propagateState(FilterState& state, const Vec3& wm, const Vec3& am, double dt, const ImuNoiseParams& noise,
+                    const Vec3& g_n) {
   const Mechanization m = state.mechanization();
   const MotionMatrix Phi = transitionMatrix(state.x, m, wm, am, dt, g_n);
   strapdownStep(state.x, m, wm, am, dt, g_n);

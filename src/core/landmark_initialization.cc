@@ -4,8 +4,8 @@
 
 namespace vi_ekf_slam {
 
-bool backProject(const MotionState& x, const Eigen::Vector2d& uv, double depth,
-                 const CameraModel& camera, const CameraExtrinsics& T_b_c, InitializedLandmark* out) {
+bool backProject(const MotionState& x, const Eigen::Vector2d& uv, double depth, const CameraModel& camera,
+                 const CameraExtrinsics& T_b_c, InitializedLandmark* out) {
   Eigen::Vector2d xn;
   Eigen::Matrix2d J_xn_uv;
   if (!uv.allFinite() || !camera.pixelToNormalized(uv, &xn, &J_xn_uv)) return false;
@@ -42,14 +42,13 @@ void appendTransformed(FilterState& state, std::int64_t id, const Landmark& lm, 
 }
 }  // namespace
 
-void appendInitializedLandmark(FilterState& state, std::int64_t id, const InitializedLandmark& l,
-                               double pixel_var, double depth_var) {
+void appendInitializedLandmark(FilterState& state, std::int64_t id, const InitializedLandmark& l, double pixel_var,
+                               double depth_var) {
   appendTransformed(state, id, Landmark::cartesian(l.p_s_l), l, Mat3::Identity(), pixel_var, l.G_depth, depth_var);
 }
 
-bool initializeLandmarkInverseDepth(FilterState& state, const FeatureObservation& obs,
-                                    const CameraModel& camera, const CameraExtrinsics& T_b_c,
-                                    const InverseDepthParams& params) {
+bool initializeLandmarkInverseDepth(FilterState& state, const FeatureObservation& obs, const CameraModel& camera,
+                                    const CameraExtrinsics& T_b_c, const InverseDepthParams& params) {
   InitializedLandmark l;
   if (!backProject(state.x, obs.uv, params.initial_depth_m, camera, T_b_c, &l)) return false;
   // Anchor: the estimated camera frame; l = (u, v, rho) of the same point in it.
@@ -66,9 +65,8 @@ bool initializeLandmarkInverseDepth(FilterState& state, const FeatureObservation
   return true;
 }
 
-bool initializeLandmarkFixedDepth(FilterState& state, const FeatureObservation& obs,
-                                  const CameraModel& camera, const CameraExtrinsics& T_b_c,
-                                  const FixedDepthParams& params) {
+bool initializeLandmarkFixedDepth(FilterState& state, const FeatureObservation& obs, const CameraModel& camera,
+                                  const CameraExtrinsics& T_b_c, const FixedDepthParams& params) {
   InitializedLandmark l;
   if (!backProject(state.x, obs.uv, params.depth_m, camera, T_b_c, &l)) return false;
   appendInitializedLandmark(state, obs.id, l, params.pixel_noise_px * params.pixel_noise_px,

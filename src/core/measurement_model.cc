@@ -31,8 +31,8 @@ bool predictObservation(const MotionState& x, const Landmark& lm, const CameraMo
     // With R_true = Exp(psi) R: d q_c = R_c_s (dq_dl dl - w dp + [q_s + w R_s_b p_b_c]x psi),
     // since q_s + w R_s_b p_b_c = w (p_s_l - p_s_b).
     const Eigen::Matrix<double, 2, 3> JR = J_pi * R_c_s;
-    J->H_l = JR * dq_dl;                                     // J_Y
-    J->H_p = -w * JR;                                        // J_p
+    J->H_l = JR * dq_dl;                                    // J_Y
+    J->H_p = -w * JR;                                       // J_p
     J->H_psi = JR * skew(q_s + w * (R_s_b * T_b_c.p_b_c));  // J_psi
   }
   return true;

@@ -43,7 +43,8 @@ std::vector<std::vector<double>> readNumericCsv(const std::string& path, size_t 
     ++n;
     if (line.empty() || line[0] == '#' || line == "\r") continue;
     const auto f = split(line, ',');
-    if (f.size() < cols) throw std::runtime_error(path + ":" + std::to_string(n) + ": expected " + std::to_string(cols) + " columns");
+    if (f.size() < cols)
+      throw std::runtime_error(path + ":" + std::to_string(n) + ": expected " + std::to_string(cols) + " columns");
     std::vector<double> r;
     for (size_t i = 0; i < cols; ++i) r.push_back(toDouble(f[i], path + ":" + std::to_string(n)));
     rows.push_back(r);
@@ -84,9 +85,12 @@ AslCamera readAslCamera(const std::string& path) {
   c.intrinsics.cy = intr[3];
   c.intrinsics.width = static_cast<int>(res[0]);
   c.intrinsics.height = static_cast<int>(res[1]);
-  if (model == "radial-tangential") c.intrinsics.model = DistortionModel::kRadTan;
-  else if (model == "equidistant") c.intrinsics.model = DistortionModel::kEquidistant;
-  else throw std::runtime_error(path + ": unsupported distortion_model '" + model + "'");
+  if (model == "radial-tangential")
+    c.intrinsics.model = DistortionModel::kRadTan;
+  else if (model == "equidistant")
+    c.intrinsics.model = DistortionModel::kEquidistant;
+  else
+    throw std::runtime_error(path + ": unsupported distortion_model '" + model + "'");
   c.intrinsics.distortion = dist;
   for (int r = 0; r < 3; ++r) {
     for (int k = 0; k < 3; ++k) c.T_b_c.R_b_c(r, k) = T[static_cast<size_t>(4 * r + k)];
@@ -106,7 +110,8 @@ ImuNoiseParams readAslImuNoise(const std::string& path) {
   fs["gyroscope_random_walk"] >> n.gyro_random_walk;
   fs["accelerometer_noise_density"] >> n.accel_noise_density;
   fs["accelerometer_random_walk"] >> n.accel_random_walk;
-  if (!(n.gyro_noise_density > 0) || !(n.accel_noise_density > 0)) throw std::runtime_error(path + ": missing noise densities");
+  if (!(n.gyro_noise_density > 0) || !(n.accel_noise_density > 0))
+    throw std::runtime_error(path + ": missing noise densities");
   return n;
 }
 
@@ -233,10 +238,12 @@ FeatureTrackData readEqvioCsv(const std::string& path, int width, int height) {
   d.camera.cy = meta["camera_cy"];
   d.camera.model = DistortionModel::kNone;
   // "T_ci" is numerically the camera pose in the IMU frame (R_b_c, p_b_c), see the data README.
-  d.T_b_c.R_b_c = Quat(meta["T_ci_qw"], meta["T_ci_qx"], meta["T_ci_qy"], meta["T_ci_qz"]).normalized().toRotationMatrix();
+  d.T_b_c.R_b_c =
+      Quat(meta["T_ci_qw"], meta["T_ci_qx"], meta["T_ci_qy"], meta["T_ci_qz"]).normalized().toRotationMatrix();
   d.T_b_c.p_b_c = Vec3(meta["T_ci_tx"], meta["T_ci_ty"], meta["T_ci_tz"]);
   for (auto& [idx, fr] : frames) {
-    for (auto& o : fr.features) o.uv = Eigen::Vector2d(d.camera.fx * o.uv.x() + d.camera.cx, d.camera.fy * o.uv.y() + d.camera.cy);
+    for (auto& o : fr.features)
+      o.uv = Eigen::Vector2d(d.camera.fx * o.uv.x() + d.camera.cx, d.camera.fy * o.uv.y() + d.camera.cy);
     d.frames.push_back(std::move(fr));
   }
   std::sort(d.imu.begin(), d.imu.end(), [](const ImuData& a, const ImuData& b) { return a.timestamp < b.timestamp; });

@@ -15,8 +15,8 @@ namespace vi_ekf_slam::eval {
 namespace {
 
 const StampedPose* truthAt(const std::vector<StampedPose>& truth, double t) {
-  auto it = std::lower_bound(truth.begin(), truth.end(), t - 1e-3,
-                             [](const StampedPose& p, double x) { return p.t < x; });
+  auto it =
+      std::lower_bound(truth.begin(), truth.end(), t - 1e-3, [](const StampedPose& p, double x) { return p.t < x; });
   if (it == truth.end() || std::abs(it->t - t) > 1e-3) return nullptr;
   return &*it;
 }
@@ -145,20 +145,21 @@ void writeRunReport(const std::string& dir, const std::vector<std::pair<std::str
     js << ",\n  \"" << name << "\": {\"ate_position_m\": " << num(m.ate_position_m)
        << ", \"ate_posyaw_m\": " << num(m.ate_posyaw_m) << ", \"ate_orientation_deg\": " << num(m.ate_orientation_deg)
        << ", \"final_position_error_m\": " << num(m.final_position_error_m)
-       << ", \"final_position_error_pct\": " << num(m.final_position_error_pct) << ", \"distance_m\": "
-       << num(m.distance_m) << ", \"nees_position\": " << num(m.nees_position)
+       << ", \"final_position_error_pct\": " << num(m.final_position_error_pct)
+       << ", \"distance_m\": " << num(m.distance_m) << ", \"nees_position\": " << num(m.nees_position)
        << ", \"nees_orientation\": " << num(m.nees_orientation) << ", \"nees_pose\": " << num(m.nees_pose)
        << ", \"consistent_fraction\": " << num(m.consistent_fraction)
        << ", \"final_scale_ratio\": " << num(m.final_scale_ratio) << ", \"map_landmarks\": " << m.map_landmarks
-       << ", \"map_error_median_m\": " << num(m.map_error_median_m) << ", \"map_error_p90_m\": " << num(m.map_error_p90_m)
-       << ", \"runs\": 1, \"frames\": " << m.frames
+       << ", \"map_error_median_m\": " << num(m.map_error_median_m)
+       << ", \"map_error_p90_m\": " << num(m.map_error_p90_m) << ", \"runs\": 1, \"frames\": " << m.frames
        << ", \"duration_s\": " << num(m.duration_s) << ", \"processing_ms_mean\": " << num(m.processing_ms_mean)
-       << ", \"processing_ms_p95\": " << num(m.processing_ms_p95) << ", \"real_time_factor\": "
-       << num(m.real_time_factor) << "}";
+       << ", \"processing_ms_p95\": " << num(m.processing_ms_p95)
+       << ", \"real_time_factor\": " << num(m.real_time_factor) << "}";
   }
   js << "\n}\n";
   std::ofstream md(dir + "/summary.md");
-  md << "| run | ATE [m] | ATE posyaw [m] | ATE rot [deg] | final err [m] | final err [% of dist] | NEES pos | NEES rot "
+  md << "| run | ATE [m] | ATE posyaw [m] | ATE rot [deg] | final err [m] | final err [% of dist] | NEES pos | NEES "
+        "rot "
         "| NEES pose | gamma | map err median [m] | ms/frame (p95) | real-time factor |\n"
         "|---|---|---|---|---|---|---|---|---|---|---|---|---|\n"
      << std::fixed;
@@ -167,8 +168,8 @@ void writeRunReport(const std::string& dir, const std::vector<std::pair<std::str
        << m.ate_orientation_deg << " | " << m.final_position_error_m << " | " << std::setprecision(2)
        << m.final_position_error_pct << " | " << m.nees_position << " | " << m.nees_orientation << " | " << m.nees_pose
        << " | " << std::setprecision(3) << m.final_scale_ratio << " | " << m.map_error_median_m << " | "
-       << std::setprecision(1) << m.processing_ms_mean
-       << " (" << m.processing_ms_p95 << ") | " << m.real_time_factor << " |\n";
+       << std::setprecision(1) << m.processing_ms_mean << " (" << m.processing_ms_p95 << ") | " << m.real_time_factor
+       << " |\n";
   }
   for (const auto& [name, m] : runs) {
     std::ofstream ts(dir + "/" + name + "_timeseries.csv");
@@ -176,7 +177,8 @@ void writeRunReport(const std::string& dir, const std::vector<std::pair<std::str
        << std::setprecision(9);
     for (const auto& f : m.series) {
       ts << f.t;
-      for (const Vec3* v : {&f.p_true, &f.p_est, &f.e_p, &f.s_p, &f.e_q, &f.s_q}) ts << "," << v->x() << "," << v->y() << "," << v->z();
+      for (const Vec3* v : {&f.p_true, &f.p_est, &f.e_p, &f.s_p, &f.e_q, &f.s_q})
+        ts << "," << v->x() << "," << v->y() << "," << v->z();
       ts << "," << f.nees_pose << "\n";
     }
   }

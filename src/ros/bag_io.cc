@@ -104,7 +104,7 @@ InputBagInfo readInputBag(const std::string& path, const RigTopics& topics) {
     throw std::runtime_error("cannot read bag '" + path + "': " + e.what());
   }
   rosbag::View view(bag, rosbag::TopicQuery(std::vector<std::string>{topics.ground_truth, "/sim/world",
-                                                                      topics.camera_info, "/tf_static"}));
+                                                                     topics.camera_info, "/tf_static"}));
   rosbag::View all(bag);
   info.start = all.getBeginTime().toSec();
   info.end = all.getEndTime().toSec();
@@ -113,7 +113,8 @@ InputBagInfo readInputBag(const std::string& path, const RigTopics& topics) {
       eval::StampedPose p;
       p.t = g->header.stamp.toSec();
       p.p = Vec3(g->pose.position.x, g->pose.position.y, g->pose.position.z);
-      p.q = Quat(g->pose.orientation.w, g->pose.orientation.x, g->pose.orientation.y, g->pose.orientation.z).normalized();
+      p.q =
+          Quat(g->pose.orientation.w, g->pose.orientation.x, g->pose.orientation.y, g->pose.orientation.z).normalized();
       info.truth.push_back(p);
     } else if (auto w = m.instantiate<std_msgs::String>()) {
       if (m.getTopic() == "/sim/world") info.world = sim::parseQuads(w->data);

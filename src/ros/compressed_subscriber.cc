@@ -29,9 +29,12 @@ class CompressedSubscriber : public image_transport::SimpleSubscriberPlugin<sens
     }
     namespace enc = sensor_msgs::image_encodings;
     std::string encoding;
-    if (img.channels() == 1) encoding = img.depth() == CV_16U ? enc::MONO16 : enc::MONO8;
-    else if (img.channels() == 3) encoding = enc::BGR8;
-    else if (img.channels() == 4) encoding = enc::BGRA8;
+    if (img.channels() == 1)
+      encoding = img.depth() == CV_16U ? enc::MONO16 : enc::MONO8;
+    else if (img.channels() == 3)
+      encoding = enc::BGR8;
+    else if (img.channels() == 4)
+      encoding = enc::BGRA8;
     else {
       ROS_WARN_THROTTLE(1.0, "compressed image with %d channels ignored", img.channels());
       return;

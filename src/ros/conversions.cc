@@ -202,8 +202,9 @@ sensor_msgs::PointCloud2 toPointCloud(const std::vector<LandmarkOutput>& lms, co
 bool allFinite(const nav_msgs::Odometry& o) {
   const auto& p = o.pose.pose;
   const auto& t = o.twist.twist;
-  const double v[] = {p.position.x, p.position.y, p.position.z, p.orientation.w, p.orientation.x, p.orientation.y,
-                      p.orientation.z, t.linear.x, t.linear.y, t.linear.z, t.angular.x, t.angular.y, t.angular.z};
+  const double v[] = {p.position.x,    p.position.y,    p.position.z, p.orientation.w, p.orientation.x,
+                      p.orientation.y, p.orientation.z, t.linear.x,   t.linear.y,      t.linear.z,
+                      t.angular.x,     t.angular.y,     t.angular.z};
   for (double x : v) {
     if (!std::isfinite(x)) return false;
   }

@@ -300,7 +300,8 @@ void EkfSlamProcessor::processImage(const PendingImage& img) {
 void EkfSlamProcessor::output(const PendingImage& img, const CameraFrame& frame, const FrameResult& r) {
   const NavState nav = filter_->navState();
   const NodeOptions& o = params_.node;
-  const double w_var = params_.filter.imu_noise.gyro_noise_density * params_.filter.imu_noise.gyro_noise_density * 200.0;
+  const double w_var =
+      params_.filter.imu_noise.gyro_noise_density * params_.filter.imu_noise.gyro_noise_density * 200.0;
   const nav_msgs::Odometry odom = toOdometry(nav, last_gyro_ - nav.b_g, w_var, img.stamp, o.world_frame, o.body_frame);
   if (!allFinite(odom)) {
     reset("non-finite odometry");

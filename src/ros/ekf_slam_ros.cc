@@ -13,7 +13,8 @@ EkfSlamRos::EkfSlamRos(ros::NodeHandle nh, ros::NodeHandle pnh) : nh_(nh), pnh_(
   const std::string err = loadParams(NodeHandleParams(pnh_), &params);
   if (!err.empty()) throw std::invalid_argument("vi_ekf_slam: impossible parameter values:\n" + err);
   ROS_INFO_STREAM(describeParams(params));
-  if (params.node.extrinsic_source == "tf") tf_listener_ = std::make_unique<tf2_ros::TransformListener>(tf_buffer_, nh_);
+  if (params.node.extrinsic_source == "tf")
+    tf_listener_ = std::make_unique<tf2_ros::TransformListener>(tf_buffer_, nh_);
   processor_ = std::make_unique<EkfSlamProcessor>(params, *this, &tf_buffer_);
 
   updater_.setHardwareID("vi_ekf_slam");
@@ -48,15 +49,19 @@ EkfSlamRos::EkfSlamRos(ros::NodeHandle nh, ros::NodeHandle pnh) : nh_(nh), pnh_(
     }
   });
 
-  imu_sub_ = nh_.subscribe<sensor_msgs::Imu>("imu", 2000, [this](const sensor_msgs::ImuConstPtr& m) {
-    std::lock_guard<std::mutex> lock(mutex_);
-    ++rate_imu_count_;
-    processor_->imu(*m);
-  }, ros::VoidConstPtr(), ros::TransportHints().tcpNoDelay());
-  info_sub_ = nh_.subscribe<sensor_msgs::CameraInfo>("camera_info", 5, [this](const sensor_msgs::CameraInfoConstPtr& m) {
-    std::lock_guard<std::mutex> lock(mutex_);
-    processor_->cameraInfo(*m);
-  });
+  imu_sub_ = nh_.subscribe<sensor_msgs::Imu>(
+      "imu", 2000,
+      [this](const sensor_msgs::ImuConstPtr& m) {
+        std::lock_guard<std::mutex> lock(mutex_);
+        ++rate_imu_count_;
+        processor_->imu(*m);
+      },
+      ros::VoidConstPtr(), ros::TransportHints().tcpNoDelay());
+  info_sub_ =
+      nh_.subscribe<sensor_msgs::CameraInfo>("camera_info", 5, [this](const sensor_msgs::CameraInfoConstPtr& m) {
+        std::lock_guard<std::mutex> lock(mutex_);
+        processor_->cameraInfo(*m);
+      });
   // Resolve (and remap) the base topic first: image_transport appends "/compressed" to the name it
   // is given, and a remap of "image" would not reach "image/compressed" otherwise.
   image_sub_ = it_.subscribe(
@@ -90,7 +95,8 @@ void EkfSlamRos::odometry(const nav_msgs::Odometry& odom) {
   path_.header = odom.header;
   path_.poses.push_back(ps);
   const size_t max_len = static_cast<size_t>(o.path_max_length);
-  if (path_.poses.size() > max_len) path_.poses.erase(path_.poses.begin(), path_.poses.end() - static_cast<long>(max_len));
+  if (path_.poses.size() > max_len)
+    path_.poses.erase(path_.poses.begin(), path_.poses.end() - static_cast<long>(max_len));
   if (path_pub_.getNumSubscribers() > 0) path_pub_.publish(path_);
 }
 

@@ -25,8 +25,10 @@ class ParamReader {
   void operator()(const std::string& name, T& value) {
     if (!src_.has(name)) return;
     T v;
-    if (src_.get(name, v)) value = v;
-    else err_ << name << " has the wrong type\n";
+    if (src_.get(name, v))
+      value = v;
+    else
+      err_ << name << " has the wrong type\n";
   }
 
  private:
@@ -59,12 +61,18 @@ std::string detectorName(TrackerParams::Detector d) {
 std::string fromReconfigure(const EkfSlamReconfigureConfig& c, NodeParams* p) {
   std::ostringstream err;
   EkfSlamConfig& f = p->filter;
-  if (auto m = mechanizationFromString(c.mechanization)) f.mechanization = *m;
-  else err << "mechanization: unknown '" << c.mechanization << "'\n";
-  if (auto t = triggerFromString(c.composition_trigger)) f.composition_trigger = *t;
-  else err << "composition_trigger: unknown '" << c.composition_trigger << "'\n";
-  if (auto i = landmarkInitFromString(c.landmark_init)) f.landmark_init = *i;
-  else err << "landmark_init: unknown '" << c.landmark_init << "'\n";
+  if (auto m = mechanizationFromString(c.mechanization))
+    f.mechanization = *m;
+  else
+    err << "mechanization: unknown '" << c.mechanization << "'\n";
+  if (auto t = triggerFromString(c.composition_trigger))
+    f.composition_trigger = *t;
+  else
+    err << "composition_trigger: unknown '" << c.composition_trigger << "'\n";
+  if (auto i = landmarkInitFromString(c.landmark_init))
+    f.landmark_init = *i;
+  else
+    err << "landmark_init: unknown '" << c.landmark_init << "'\n";
   f.composition_new_landmarks = c.composition_new_landmarks;
   f.update.pixel_noise_px = c.pixel_noise_px;
   f.update.gate_probability = c.gate_probability;
@@ -79,8 +87,10 @@ std::string fromReconfigure(const EkfSlamReconfigureConfig& c, NodeParams* p) {
   f.imu_noise.accel_random_walk = c.accel_random_walk;
   f.imu_noise.gyro_random_walk = c.gyro_random_walk;
   TrackerParams& t = p->tracker;
-  if (auto d = detectorFromString(c.detector)) t.detector = *d;
-  else err << "detector: unknown '" << c.detector << "'\n";
+  if (auto d = detectorFromString(c.detector))
+    t.detector = *d;
+  else
+    err << "detector: unknown '" << c.detector << "'\n";
   t.max_tracks = c.max_tracks;
   t.min_distance_px = c.min_distance_px;
   t.quality_level = c.quality_level;
@@ -134,9 +144,12 @@ bool YamlParams::get(const std::string& name, int& v) const {
 
 bool YamlParams::get(const std::string& name, bool& v) const {
   const std::string& s = values_.at(name);
-  if (s == "true" || s == "True") v = true;
-  else if (s == "false" || s == "False") v = false;
-  else return false;
+  if (s == "true" || s == "True")
+    v = true;
+  else if (s == "false" || s == "False")
+    v = false;
+  else
+    return false;
   return true;
 }
 
@@ -297,14 +310,16 @@ std::string describeParams(const NodeParams& p) {
   const NodeOptions& n = p.node;
   s << "vi_ekf_slam parameters:\n"
     << "  frames: world_frame=" << n.world_frame << " body_frame=" << n.body_frame << " publish_tf=" << n.publish_tf
-      << " tune_allocator=" << n.tune_allocator << "\n"
+    << " tune_allocator=" << n.tune_allocator << "\n"
     << "  mechanization=" << toString(f.mechanization) << " composition_trigger=" << toString(f.composition_trigger)
     << " composition_new_landmarks=" << f.composition_new_landmarks << "\n"
     << "  landmark_init=" << toString(f.landmark_init) << " landmark_depth_m=" << f.landmark_depth_m
-    << " [m] landmark_depth_sigma_m=" << f.landmark_depth_sigma_m << " [m] inverse_depth_initial_m="
-    << f.inverse_depth_initial_m << " [m] inverse_depth_sigma=" << f.inverse_depth_sigma << " [1/m]\n"
+    << " [m] landmark_depth_sigma_m=" << f.landmark_depth_sigma_m
+    << " [m] inverse_depth_initial_m=" << f.inverse_depth_initial_m
+    << " [m] inverse_depth_sigma=" << f.inverse_depth_sigma << " [1/m]\n"
     << "  max_landmarks=" << f.max_landmarks << " landmark_timeout_s=" << f.landmark_timeout_s
-    << " [s] pixel_noise_px=" << f.update.pixel_noise_px << " [px] gate_probability=" << f.update.gate_probability << "\n"
+    << " [s] pixel_noise_px=" << f.update.pixel_noise_px << " [px] gate_probability=" << f.update.gate_probability
+    << "\n"
     << "  imu noise: accel " << f.imu_noise.accel_noise_density << " [m/s^2/sqrt(Hz)], gyro "
     << f.imu_noise.gyro_noise_density << " [rad/s/sqrt(Hz)], accel walk " << f.imu_noise.accel_random_walk
     << " [m/s^3/sqrt(Hz)], gyro walk " << f.imu_noise.gyro_random_walk << " [rad/s^2/sqrt(Hz)]\n"
@@ -314,10 +329,11 @@ std::string describeParams(const NodeParams& p) {
     << f.initial.accel_bias_mps2 << " [m/s^2], gyro bias " << f.initial.gyro_bias_radps << " [rad/s]\n"
     << "  static init: window " << p.static_init.window_s << " [s], accel std < " << p.static_init.max_accel_std_mps2
     << " [m/s^2], gyro std < " << p.static_init.max_gyro_std_radps << " [rad/s]\n"
-    << "  tracker: detector=" << detectorName(t.detector) << " max_tracks=" << t.max_tracks << " min_distance_px="
-    << t.min_distance_px << " quality_level=" << t.quality_level << " fast_threshold=" << t.fast_threshold
-    << " klt_window_px=" << t.klt_window_px << " klt_pyramid_levels=" << t.klt_pyramid_levels
-    << " fb_threshold_px=" << t.fb_threshold_px << " ransac_threshold_px=" << t.ransac_threshold_px << "\n"
+    << "  tracker: detector=" << detectorName(t.detector) << " max_tracks=" << t.max_tracks
+    << " min_distance_px=" << t.min_distance_px << " quality_level=" << t.quality_level
+    << " fast_threshold=" << t.fast_threshold << " klt_window_px=" << t.klt_window_px
+    << " klt_pyramid_levels=" << t.klt_pyramid_levels << " fb_threshold_px=" << t.fb_threshold_px
+    << " ransac_threshold_px=" << t.ransac_threshold_px << "\n"
     << "  camera: time_offset " << n.camera_time_offset_s << " [s], calibration_file='" << n.camera_calibration_file
     << "', extrinsic_source=" << n.extrinsic_source << "\n"
     << "  sync: max_image_queue=" << n.max_image_queue << " time_jump_reset_s=" << n.time_jump_reset_s

@@ -92,17 +92,17 @@ std::vector<Quad> hallwayGeometry(const HallwayParams& p) {
   const Vec3 X = Vec3::UnitX(), Y = Vec3::UnitY(), Z = Vec3::UnitZ();  // z is down
   std::vector<Quad> q;
   // Main hallway along x. Each u x v points into the corridor.
-  q.push_back(quad({x0, -hw, floor_z}, X, x1 - x0, -Z, h, "wall"));  // left wall, faces +y
-  q.push_back(quad({x0, hw, ceil_z}, X, xa - x0, Z, h, "wall"));     // right wall up to the opening, faces -y
-  q.push_back(quad({xb, hw, ceil_z}, X, x1 - xb, Z, h, "wall"));     // right wall after it
-  q.push_back(quad({x0, -hw, ceil_z}, Y, 2 * hw, Z, h, "wall"));     // start wall, faces +x
-  q.push_back(quad({x1, -hw, floor_z}, Y, 2 * hw, -Z, h, "wall"));   // end wall, faces -x
-  q.push_back(quad({x0, -hw, floor_z}, Y, 2 * hw, X, x1 - x0, "floor"));     // faces up (-z)
-  q.push_back(quad({x0, -hw, ceil_z}, X, x1 - x0, Y, 2 * hw, "ceiling"));    // faces down (+z)
+  q.push_back(quad({x0, -hw, floor_z}, X, x1 - x0, -Z, h, "wall"));        // left wall, faces +y
+  q.push_back(quad({x0, hw, ceil_z}, X, xa - x0, Z, h, "wall"));           // right wall up to the opening, faces -y
+  q.push_back(quad({xb, hw, ceil_z}, X, x1 - xb, Z, h, "wall"));           // right wall after it
+  q.push_back(quad({x0, -hw, ceil_z}, Y, 2 * hw, Z, h, "wall"));           // start wall, faces +x
+  q.push_back(quad({x1, -hw, floor_z}, Y, 2 * hw, -Z, h, "wall"));         // end wall, faces -x
+  q.push_back(quad({x0, -hw, floor_z}, Y, 2 * hw, X, x1 - x0, "floor"));   // faces up (-z)
+  q.push_back(quad({x0, -hw, ceil_z}, X, x1 - x0, Y, 2 * hw, "ceiling"));  // faces down (+z)
   // Narrow side corridor towards +y.
-  q.push_back(quad({xa, hw, ceil_z}, Y, y1 - hw, Z, h, "wall"));     // faces +x
-  q.push_back(quad({xb, hw, floor_z}, Y, y1 - hw, -Z, h, "wall"));   // faces -x
-  q.push_back(quad({xa, y1, ceil_z}, X, xb - xa, Z, h, "wall"));     // end wall, faces -y
+  q.push_back(quad({xa, hw, ceil_z}, Y, y1 - hw, Z, h, "wall"));    // faces +x
+  q.push_back(quad({xb, hw, floor_z}, Y, y1 - hw, -Z, h, "wall"));  // faces -x
+  q.push_back(quad({xa, y1, ceil_z}, X, xb - xa, Z, h, "wall"));    // end wall, faces -y
   q.push_back(quad({xa, hw, floor_z}, Y, y1 - hw, X, xb - xa, "floor"));
   q.push_back(quad({xa, hw, ceil_z}, X, xb - xa, Y, y1 - hw, "ceiling"));
   return q;
@@ -163,7 +163,8 @@ std::string serializeQuads(const std::vector<Quad>& quads) {
   s.precision(10);
   for (const auto& q : quads) {
     s << q.kind << " " << q.origin.x() << " " << q.origin.y() << " " << q.origin.z() << " " << q.u.x() << " " << q.u.y()
-      << " " << q.u.z() << " " << q.v.x() << " " << q.v.y() << " " << q.v.z() << " " << q.u_len << " " << q.v_len << "\n";
+      << " " << q.u.z() << " " << q.v.x() << " " << q.v.y() << " " << q.v.z() << " " << q.u_len << " " << q.v_len
+      << "\n";
   }
   return s.str();
 }

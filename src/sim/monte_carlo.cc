@@ -8,9 +8,7 @@ namespace vi_ekf_slam::sim {
 
 namespace {
 
-Vec3 sigmas(const Eigen::MatrixXd& P, int i) {
-  return P.block<3, 3>(i, i).diagonal().cwiseMax(0.0).cwiseSqrt();
-}
+Vec3 sigmas(const Eigen::MatrixXd& P, int i) { return P.block<3, 3>(i, i).diagonal().cwiseMax(0.0).cwiseSqrt(); }
 
 Vec3 gaussian3(std::mt19937_64& rng, const Vec3& sigma) {
   std::normal_distribution<double> n(0.0, 1.0);

@@ -128,7 +128,8 @@ Renderer::Renderer(const std::vector<Quad>& quads, const CameraModel& camera, co
       Eigen::Vector2d xn;
       if (!camera.pixelToNormalized(Eigen::Vector2d(u, v), &xn)) xn.setZero();
       const Eigen::Vector3d r = Eigen::Vector3d(xn.x(), xn.y(), 1.0).normalized();
-      rays_.at<cv::Vec3f>(v, u) = cv::Vec3f(static_cast<float>(r.x()), static_cast<float>(r.y()), static_cast<float>(r.z()));
+      rays_.at<cv::Vec3f>(v, u) =
+          cv::Vec3f(static_cast<float>(r.x()), static_cast<float>(r.y()), static_cast<float>(r.z()));
     }
   }
 }
@@ -146,7 +147,8 @@ cv::Mat Renderer::renderPose(const Vec3& p_n_b, const Quat& q_n_b) const {
   std::vector<Plane> planes;
   for (const auto& s : surfaces_) {
     planes.push_back({s.quad.origin.cast<float>(), s.quad.u.cast<float>(), s.quad.v.cast<float>(),
-                      s.quad.normal().cast<float>(), static_cast<float>(s.quad.u_len), static_cast<float>(s.quad.v_len)});
+                      s.quad.normal().cast<float>(), static_cast<float>(s.quad.u_len),
+                      static_cast<float>(s.quad.v_len)});
   }
   cv::parallel_for_(cv::Range(0, rays_.rows), [&](const cv::Range& range) {
     for (int y = range.start; y < range.end; ++y) {
@@ -200,8 +202,10 @@ cv::Mat Renderer::render(const Trajectory& traj, double t, std::mt19937_64& rng)
     const double ti = n == 1 ? t : t + params_.exposure_s * (static_cast<double>(i) / (n - 1) - 0.5);
     const TrajectorySample s = traj.sample(ti);
     const cv::Mat img = renderPose(s.p_n_b, s.q_n_b);
-    if (acc.empty()) acc = img / n;
-    else acc += img / n;
+    if (acc.empty())
+      acc = img / n;
+    else
+      acc += img / n;
   }
   if (params_.noise_sigma > 0.0) {
     cv::Mat noise(acc.size(), CV_32F);

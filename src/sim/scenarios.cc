@@ -27,10 +27,10 @@ CameraExtrinsics torsoCameraExtrinsics() {
 ImuNoiseParams paperImuNoise() {
   ImuNoiseParams n;
   const double mg = 9.81e-3;
-  n.accel_noise_density = 7.5 * mg / std::sqrt(200.0);      // 5.2e-3 m/s^2/sqrt(Hz)
-  n.gyro_noise_density = 0.0056 * M_PI / 180.0;             // 9.8e-5 rad/s/sqrt(Hz)
-  n.accel_random_walk = 1.0e-3;                              // m/s^3/sqrt(Hz)
-  n.gyro_random_walk = 1.0e-5;                               // rad/s^2/sqrt(Hz)
+  n.accel_noise_density = 7.5 * mg / std::sqrt(200.0);  // 5.2e-3 m/s^2/sqrt(Hz)
+  n.gyro_noise_density = 0.0056 * M_PI / 180.0;         // 9.8e-5 rad/s/sqrt(Hz)
+  n.accel_random_walk = 1.0e-3;                         // m/s^3/sqrt(Hz)
+  n.gyro_random_walk = 1.0e-5;                          // rad/s^2/sqrt(Hz)
   return n;
 }
 

@@ -15,8 +15,8 @@ NavState trueNavState(const Trajectory& trajectory, double t) {
   return n;
 }
 
-SimRun runSimulation(const Scenario& sc, const EkfSlamConfig& config, const NavState& initial,
-                     std::mt19937_64& rng, const FrameCallback& callback, bool keep_frames) {
+SimRun runSimulation(const Scenario& sc, const EkfSlamConfig& config, const NavState& initial, std::mt19937_64& rng,
+                     const FrameCallback& callback, bool keep_frames) {
   const Trajectory& traj = *sc.trajectory;
   ImuSequence simulated;
   if (!sc.recorded_imu) simulated = simulateImu(traj, sc.imu, rng);
@@ -30,8 +30,7 @@ SimRun runSimulation(const Scenario& sc, const EkfSlamConfig& config, const NavS
   auto frameTime = [&](int k) { return initial.timestamp + k * cam_dt; };
   for (size_t k = 0; k < imu.samples.size(); ++k) {
     filter.addImu(imu.samples[k]);
-    while (frameTime(next_frame) <= imu.samples[k].timestamp + 1e-12 &&
-           frameTime(next_frame) <= traj.endTime()) {
+    while (frameTime(next_frame) <= imu.samples[k].timestamp + 1e-12 && frameTime(next_frame) <= traj.endTime()) {
       const double t = frameTime(next_frame++);
       FrameRecord rec;
       rec.t = t;

@@ -45,11 +45,11 @@ TEST_P(EkfSlamConvergence, NoiseFreeRunConvergesToTruth) {
   EXPECT_LT(errs.back(), 4.0 * c.max_median_landmark_m);
 }
 
-INSTANTIATE_TEST_SUITE_P(
-    Mechanizations, EkfSlamConvergence,
-    ::testing::Values(ConvergenceCase{Mechanization::kWorldCentric, 0.02, 0.008, 0.05},
-                      ConvergenceCase{Mechanization::kSensorCentric, 0.005, 0.001, 0.005},
-                      ConvergenceCase{Mechanization::kSensorCentricComposition, 0.005, 0.001, 0.005}));
+INSTANTIATE_TEST_SUITE_P(Mechanizations, EkfSlamConvergence,
+                         ::testing::Values(ConvergenceCase{Mechanization::kWorldCentric, 0.02, 0.008, 0.05},
+                                           ConvergenceCase{Mechanization::kSensorCentric, 0.005, 0.001, 0.005},
+                                           ConvergenceCase{Mechanization::kSensorCentricComposition, 0.005, 0.001,
+                                                           0.005}));
 
 TEST(EkfSlam, RejectsImpossibleConfiguration) {
   EkfSlamConfig cfg;
@@ -131,22 +131,21 @@ TEST(EkfSlam, SwitchingMechanizationWhileRunningKeepsPoseAndMap) {
   cfg.imu_noise = sc.imu.noise;
   std::mt19937_64 rng(28);
   int switches = 0;
-  sim::runSimulation(sc, cfg, sim::trueNavState(*sc.trajectory, 0.0), rng,
-                     [&](EkfSlam& filter, sim::FrameRecord& rec) {
-                       if (rec.result.processed && (switches < 3) && rec.t > 1.0 + switches) {
-                         const NavState before = filter.navState();
-                         const auto lm_before = filter.landmarks();
-                         const Mechanization next = switches % 2 == 0 ? Mechanization::kSensorCentricComposition
-                                                                      : Mechanization::kWorldCentric;
-                         filter.setMechanization(next);
-                         ++switches;
-                         const NavState after = filter.navState();
-                         EXPECT_EQ(filter.mechanization(), next);
-                         EXPECT_LT((after.p_n_b - before.p_n_b).norm(), 1e-9);
-                         EXPECT_LT(test::maxAbs(after.cov - before.cov), 1e-9);
-                         EXPECT_EQ(filter.landmarks().size(), lm_before.size());
-                       }
-                     });
+  sim::runSimulation(sc, cfg, sim::trueNavState(*sc.trajectory, 0.0), rng, [&](EkfSlam& filter, sim::FrameRecord& rec) {
+    if (rec.result.processed && (switches < 3) && rec.t > 1.0 + switches) {
+      const NavState before = filter.navState();
+      const auto lm_before = filter.landmarks();
+      const Mechanization next =
+          switches % 2 == 0 ? Mechanization::kSensorCentricComposition : Mechanization::kWorldCentric;
+      filter.setMechanization(next);
+      ++switches;
+      const NavState after = filter.navState();
+      EXPECT_EQ(filter.mechanization(), next);
+      EXPECT_LT((after.p_n_b - before.p_n_b).norm(), 1e-9);
+      EXPECT_LT(test::maxAbs(after.cov - before.cov), 1e-9);
+      EXPECT_EQ(filter.landmarks().size(), lm_before.size());
+    }
+  });
   EXPECT_EQ(switches, 3);
 }
 

@@ -68,7 +68,7 @@ TEST(EkfUpdate, GateRejectsGrossOutlierAndReportsIt) {
   s.setCovariance(Eigen::MatrixXd::Identity(s.dim(), s.dim()) * 1e-4);  // confident filter
   auto obs = perfectObservations(s, cam, T);
   ASSERT_EQ(obs.size(), 6u);
-  obs[2].uv += Eigen::Vector2d(60.0, -45.0);  // a mismatched track
+  obs[2].uv += Eigen::Vector2d(60.0, -45.0);      // a mismatched track
   obs.push_back({999, Eigen::Vector2d(10, 10)});  // not in the map
   const FilterState s0 = s;
   const UpdateResult r = ekfUpdate(s, obs, cam, T, UpdateParams());

@@ -45,8 +45,9 @@ TEST(FilterState, BoxplusBoxminusRoundTrip) {
 TEST(FilterState, AppendLandmarkKeepsSymmetryAndRejectsDuplicates) {
   std::mt19937_64 rng(25);
   FilterState s = test::randomState(Mechanization::kWorldCentric, 1, rng);
-  EXPECT_THROW(s.appendLandmark(100, Landmark::cartesian(Vec3::Zero()), Mat3::Identity(), Eigen::MatrixXd::Zero(3, s.dim())),
-               std::invalid_argument);
+  EXPECT_THROW(
+      s.appendLandmark(100, Landmark::cartesian(Vec3::Zero()), Mat3::Identity(), Eigen::MatrixXd::Zero(3, s.dim())),
+      std::invalid_argument);
   const Eigen::MatrixXd cross = Eigen::MatrixXd::Random(3, s.dim()) * 1e-3;
   s.appendLandmark(7, Landmark::cartesian(Vec3(1, 2, 3)), Mat3::Identity(), cross);
   const Eigen::MatrixXd& P = s.covariance();

@@ -9,8 +9,7 @@ using namespace vi_ekf_slam;
 namespace {
 
 /// Numerical Jacobian of a state -> state map (error state in, error state out).
-Eigen::MatrixXd numericFrameChangeJacobian(const FilterState& s0,
-                                           const std::function<void(FilterState&)>& change) {
+Eigen::MatrixXd numericFrameChangeJacobian(const FilterState& s0, const std::function<void(FilterState&)>& change) {
   FilterState ref = s0;
   change(ref);
   return test::numericJacobian(
@@ -76,8 +75,8 @@ TEST(Composition, PreservesNavigationFramePoseAndMapAndResetsSensorPose) {
 TEST(MechanizationSwitch, WorldToSensorJacobianMatchesNumeric) {
   std::mt19937_64 rng(17);
   const FilterState s0 = test::randomState(Mechanization::kWorldCentric, 3, rng);
-  const Eigen::MatrixXd Jn = numericFrameChangeJacobian(
-      s0, [](FilterState& s) { switchMechanization(s, Mechanization::kSensorCentric); });
+  const Eigen::MatrixXd Jn =
+      numericFrameChangeJacobian(s0, [](FilterState& s) { switchMechanization(s, Mechanization::kSensorCentric); });
   const Eigen::MatrixXd J = denseJacobian(worldToSensorJacobian(s0), s0.numLandmarks());
   ASSERT_EQ(J.rows(), 21 + 9);
   EXPECT_LT(test::maxAbs(Jn - J), 1e-7) << "\n" << Jn - J;
@@ -86,8 +85,8 @@ TEST(MechanizationSwitch, WorldToSensorJacobianMatchesNumeric) {
 TEST(MechanizationSwitch, SensorToWorldJacobianMatchesNumeric) {
   std::mt19937_64 rng(18);
   const FilterState s0 = test::randomState(Mechanization::kSensorCentric, 3, rng);
-  const Eigen::MatrixXd Jn = numericFrameChangeJacobian(
-      s0, [](FilterState& s) { switchMechanization(s, Mechanization::kWorldCentric); });
+  const Eigen::MatrixXd Jn =
+      numericFrameChangeJacobian(s0, [](FilterState& s) { switchMechanization(s, Mechanization::kWorldCentric); });
   const Eigen::MatrixXd J = denseJacobian(sensorToWorldJacobian(s0), s0.numLandmarks());
   ASSERT_EQ(J.rows(), 15 + 9);
   EXPECT_LT(test::maxAbs(Jn - J), 1e-7) << "\n" << Jn - J;
@@ -136,8 +135,7 @@ TEST(NavigationOutput, SensorCentricCovarianceMatchesNumericPropagation) {
         s.boxplus(d);
         const NavState n = navState(s);
         Eigen::VectorXd e(15);
-        e << n.p_n_b - n0.p_n_b, n.v_n_b - n0.v_n_b, n.b_a - n0.b_a, rotationError(n.q_n_b, n0.q_n_b),
-            n.b_g - n0.b_g;
+        e << n.p_n_b - n0.p_n_b, n.v_n_b - n0.v_n_b, n.b_a - n0.b_a, rotationError(n.q_n_b, n0.q_n_b), n.b_g - n0.b_g;
         return e;
       },
       s0.dim());

@@ -95,8 +95,7 @@ TEST_P(PropagationTest, CovarianceStaysSymmetricPsdAndTouchesOnlyMotionBlocks) {
   const Eigen::MatrixXd P0 = s.covariance();
   ImuNoiseParams noise;
   for (int k = 0; k < 400; ++k) {
-    propagateState(s, test::randomVec(rng, 1.0), Vec3(0, 0, -9.81) + test::randomVec(rng, 1.0), 0.005, noise,
-                   kG);
+    propagateState(s, test::randomVec(rng, 1.0), Vec3(0, 0, -9.81) + test::randomVec(rng, 1.0), 0.005, noise, kG);
   }
   const Eigen::MatrixXd& P = s.covariance();
   const int m = s.motionDim();
@@ -104,9 +103,9 @@ TEST_P(PropagationTest, CovarianceStaysSymmetricPsdAndTouchesOnlyMotionBlocks) {
   const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> es(P);
   EXPECT_GT(es.eigenvalues().minCoeff(), -1e-12);
   // P_mm is untouched by propagation (eq. 19).
-  EXPECT_EQ(test::maxAbs(P.bottomRightCorner(s.dim() - m, s.dim() - m) -
-                         P0.bottomRightCorner(s.dim() - m, s.dim() - m)),
-            0.0);
+  EXPECT_EQ(
+      test::maxAbs(P.bottomRightCorner(s.dim() - m, s.dim() - m) - P0.bottomRightCorner(s.dim() - m, s.dim() - m)),
+      0.0);
 }
 
 TEST_P(PropagationTest, LazyCrossCovarianceEqualsPerSamplePropagation) {

@@ -53,8 +53,8 @@ TEST_P(LandmarkInitTest, CovarianceIsFirstOrderPropagation) {
   Gx.middleCols<3>(idx::kPsi) = l.G_psi;
   const Eigen::MatrixXd& P = s.covariance();
   EXPECT_LT(test::maxAbs(P.block(n, 0, 3, n) - Gx * P0), 1e-12);
-  const Eigen::Matrix3d Pll = Gx * P0 * Gx.transpose() + l.G_uv * l.G_uv.transpose() +
-                              16.0 * l.G_depth * l.G_depth.transpose();
+  const Eigen::Matrix3d Pll =
+      Gx * P0 * Gx.transpose() + l.G_uv * l.G_uv.transpose() + 16.0 * l.G_depth * l.G_depth.transpose();
   EXPECT_LT(test::maxAbs(P.block<3, 3>(n, n) - Pll), 1e-12);
   EXPECT_LT((s.landmark(3).l - l.p_s_l).norm(), 1e-12);
 }
@@ -66,7 +66,7 @@ TEST(LandmarkInit, LargeVarianceAlongTheRayPixelNoiseAcross) {
   const CameraModel cam = test::paperCamera();
   const CameraExtrinsics T = test::forwardCamera();
   FilterState s(Mechanization::kSensorCentric);  // zero pose uncertainty in {s}
-  FixedDepthParams p;  // 8 m +- 4 m, 1 px
+  FixedDepthParams p;                            // 8 m +- 4 m, 1 px
   ASSERT_TRUE(initializeLandmarkFixedDepth(s, {1, Eigen::Vector2d(349.0, 269.5)}, cam, T, p));
   const Mat3 P = s.covariance().block<3, 3>(s.landmarkIndex(0), s.landmarkIndex(0));
   // At the principal point the ray is the camera z axis = body x axis.

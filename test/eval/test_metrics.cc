@@ -22,7 +22,8 @@ TEST(Metrics, NeesOfAKnownGaussianAveragesToItsDof) {
   // Mean of chi^2(6) is 6, std-dev of the average sqrt(12 / n) = 0.024.
   EXPECT_NEAR(sum / n, 6.0, 0.1);
   // An over-confident covariance (half the true one) doubles the NEES.
-  EXPECT_NEAR(eval::nees(L * Eigen::VectorXd::Ones(6), 0.5 * P), 2.0 * eval::nees(L * Eigen::VectorXd::Ones(6), P), 1e-9);
+  EXPECT_NEAR(eval::nees(L * Eigen::VectorXd::Ones(6), 0.5 * P), 2.0 * eval::nees(L * Eigen::VectorXd::Ones(6), P),
+              1e-9);
 }
 
 TEST(Metrics, NeesBandMatchesChiSquare) {

@@ -49,12 +49,18 @@ sensor_msgs::CameraInfo cameraInfo(const CameraModel& cam, const ros::Time& stam
 sensor_msgs::ImagePtr encode(const cv::Mat& mono, const std::string& enc, const std_msgs::Header& h) {
   namespace e = sensor_msgs::image_encodings;
   cv::Mat img;
-  if (enc == e::MONO8) img = mono;
-  else if (enc == e::MONO16) mono.convertTo(img, CV_16U, 256.0);
-  else if (enc == e::BGR8) cv::cvtColor(mono, img, cv::COLOR_GRAY2BGR);
-  else if (enc == e::RGB8) cv::cvtColor(mono, img, cv::COLOR_GRAY2RGB);
-  else if (enc == e::BGRA8) cv::cvtColor(mono, img, cv::COLOR_GRAY2BGRA);
-  else mono.convertTo(img, CV_32F, 1.0 / 255.0);  // e.g. 32FC1: not supported by the filter
+  if (enc == e::MONO8)
+    img = mono;
+  else if (enc == e::MONO16)
+    mono.convertTo(img, CV_16U, 256.0);
+  else if (enc == e::BGR8)
+    cv::cvtColor(mono, img, cv::COLOR_GRAY2BGR);
+  else if (enc == e::RGB8)
+    cv::cvtColor(mono, img, cv::COLOR_GRAY2RGB);
+  else if (enc == e::BGRA8)
+    cv::cvtColor(mono, img, cv::COLOR_GRAY2BGRA);
+  else
+    mono.convertTo(img, CV_32F, 1.0 / 255.0);  // e.g. 32FC1: not supported by the filter
   return cv_bridge::CvImage(h, enc, img).toImageMsg();
 }
 

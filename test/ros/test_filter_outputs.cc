@@ -79,36 +79,40 @@ TEST(FilterNode, BehavesOnThisInputStream) {
     std::lock_guard<std::mutex> l(rec.m);
     rec.odom.push_back(*m);
   });
-  auto s2 = nh.subscribe<geometry_msgs::PoseStamped>("/ground_truth/pose", 1000, [&](const geometry_msgs::PoseStampedConstPtr& m) {
-    std::lock_guard<std::mutex> l(rec.m);
-    rec.truth[m->header.stamp.toSec()] = *m;
-  });
-  auto s3 = nh.subscribe<vi_ekf_slam::FilterStatus>("/vi_ekf_slam/status", 1000, [&](const vi_ekf_slam::FilterStatusConstPtr& m) {
-    std::lock_guard<std::mutex> l(rec.m);
-    rec.status.push_back(*m);
-  });
-  auto s4 = nh.subscribe<sensor_msgs::PointCloud2>("/vi_ekf_slam/landmarks", 10, [&](const sensor_msgs::PointCloud2ConstPtr&) {
-    std::lock_guard<std::mutex> l(rec.m);
-    ++rec.clouds;
-  });
+  auto s2 = nh.subscribe<geometry_msgs::PoseStamped>("/ground_truth/pose", 1000,
+                                                     [&](const geometry_msgs::PoseStampedConstPtr& m) {
+                                                       std::lock_guard<std::mutex> l(rec.m);
+                                                       rec.truth[m->header.stamp.toSec()] = *m;
+                                                     });
+  auto s3 = nh.subscribe<vi_ekf_slam::FilterStatus>("/vi_ekf_slam/status", 1000,
+                                                    [&](const vi_ekf_slam::FilterStatusConstPtr& m) {
+                                                      std::lock_guard<std::mutex> l(rec.m);
+                                                      rec.status.push_back(*m);
+                                                    });
+  auto s4 = nh.subscribe<sensor_msgs::PointCloud2>("/vi_ekf_slam/landmarks", 10,
+                                                   [&](const sensor_msgs::PointCloud2ConstPtr&) {
+                                                     std::lock_guard<std::mutex> l(rec.m);
+                                                     ++rec.clouds;
+                                                   });
   auto s5 = nh.subscribe<std_msgs::String>("/vi_ekf_slam/events", 100, [&](const std_msgs::StringConstPtr& m) {
     std::lock_guard<std::mutex> l(rec.m);
     rec.events.push_back(m->data);
   });
-  auto s6 = nh.subscribe<diagnostic_msgs::DiagnosticArray>("/diagnostics", 100, [&](const diagnostic_msgs::DiagnosticArrayConstPtr& m) {
-    std::lock_guard<std::mutex> l(rec.m);
-    for (const auto& st : m->status) {
-      if (st.name.find("inputs") == std::string::npos) continue;
-      rec.max_inputs_level = std::max<int>(rec.max_inputs_level, st.level);
-      rec.last_diag = ros::Time::now();
-      for (const auto& kv : st.values) {
-        try {
-          rec.inputs[kv.key] = std::stod(kv.value);
-        } catch (const std::exception&) {
+  auto s6 = nh.subscribe<diagnostic_msgs::DiagnosticArray>(
+      "/diagnostics", 100, [&](const diagnostic_msgs::DiagnosticArrayConstPtr& m) {
+        std::lock_guard<std::mutex> l(rec.m);
+        for (const auto& st : m->status) {
+          if (st.name.find("inputs") == std::string::npos) continue;
+          rec.max_inputs_level = std::max<int>(rec.max_inputs_level, st.level);
+          rec.last_diag = ros::Time::now();
+          for (const auto& kv : st.values) {
+            try {
+              rec.inputs[kv.key] = std::stod(kv.value);
+            } catch (const std::exception&) {
+            }
+          }
         }
-      }
-    }
-  });
+      });
 
   ros::AsyncSpinner spinner(2);
   spinner.start();
@@ -231,9 +235,11 @@ TEST(FilterNode, BehavesOnThisInputStream) {
       if (std::abs(t0 - switch_stamp) > 0.5) continue;
       const Eigen::Quaterniond q(rec.odom[i - 1].pose.pose.orientation.w, rec.odom[i - 1].pose.pose.orientation.x,
                                  rec.odom[i - 1].pose.pose.orientation.y, rec.odom[i - 1].pose.pose.orientation.z);
-      const Eigen::Vector3d v_w = q * Eigen::Vector3d(rec.odom[i - 1].twist.twist.linear.x, rec.odom[i - 1].twist.twist.linear.y,
-                                                      rec.odom[i - 1].twist.twist.linear.z);
-      const Eigen::Vector3d jump = pos(rec.odom[i].pose.pose.position) - pos(rec.odom[i - 1].pose.pose.position) - v_w * (t1 - t0);
+      const Eigen::Vector3d v_w =
+          q * Eigen::Vector3d(rec.odom[i - 1].twist.twist.linear.x, rec.odom[i - 1].twist.twist.linear.y,
+                              rec.odom[i - 1].twist.twist.linear.z);
+      const Eigen::Vector3d jump =
+          pos(rec.odom[i].pose.pose.position) - pos(rec.odom[i - 1].pose.pose.position) - v_w * (t1 - t0);
       worst = std::max(worst, jump.norm());
     }
     std::printf("largest pose jump around the switch: %.4f m\n", worst);

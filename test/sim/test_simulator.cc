@@ -159,7 +159,8 @@ TEST(Simulator, TrackingCameraKeepsTracksAndAddsNoise) {
   }
   EXPECT_GT(kept, 35);  // most tracks continue from one frame to the next
   // Pixel noise: residuals against the noise-free projection have ~1 px std-dev.
-  const auto exact = sim::visibleLandmarks(sc.trajectory->sample(5.0 + 1.0 / 28), sc.world, sc.camera, sc.T_b_c, sc.cam);
+  const auto exact =
+      sim::visibleLandmarks(sc.trajectory->sample(5.0 + 1.0 / 28), sc.world, sc.camera, sc.T_b_c, sc.cam);
   double s2 = 0.0;
   int n = 0;
   for (const auto& f : b.features) {
@@ -213,7 +214,7 @@ TEST(BsplineTrajectory, ReproducesTheInputPosesAndIsConsistent) {
     max_a = std::max(max_a, (s.a_n_b - r.a_n_b).norm());
     max_w = std::max(max_w, (s.w_b - r.w_b).norm());
   }
-  EXPECT_LT(max_p, 1e-3);    // approximating spline: error ~ dt^2 a / 6
+  EXPECT_LT(max_p, 1e-3);  // approximating spline: error ~ dt^2 a / 6
   EXPECT_LT(max_q, 2e-4);
   EXPECT_LT(max_v, 5e-3);
   EXPECT_LT(max_a, 0.02);

@@ -12,8 +12,8 @@ namespace vi_ekf_slam {
 enum class DistortionModel { kNone, kRadTan, kEquidistant };
 
 struct CameraIntrinsics {
-  int width = 0;   ///< [px]
-  int height = 0;  ///< [px]
+  int width = 0;                                  ///< [px]
+  int height = 0;                                 ///< [px]
   double fx = 0.0, fy = 0.0, cx = 0.0, cy = 0.0;  ///< [px]
   DistortionModel model = DistortionModel::kNone;
   /// kRadTan: k1 k2 p1 p2 [k3]; kEquidistant: k1 k2 k3 k4.
@@ -36,12 +36,10 @@ class CameraModel {
   /// Normalized undistorted coordinates -> pixel; J = d(uv)/d(xn).
   Eigen::Vector2d normalizedToPixel(const Eigen::Vector2d& xn, Eigen::Matrix2d* J = nullptr) const;
   /// Pixel -> normalized undistorted coordinates; J = d(xn)/d(uv). False if it does not converge.
-  bool pixelToNormalized(const Eigen::Vector2d& uv, Eigen::Vector2d* xn,
-                         Eigen::Matrix2d* J = nullptr) const;
+  bool pixelToNormalized(const Eigen::Vector2d& uv, Eigen::Vector2d* xn, Eigen::Matrix2d* J = nullptr) const;
   /// Projects a point given in the camera frame; J = d(uv)/d(p_c) (2x3). False if the point
   /// is not in front of the camera.
-  bool project(const Eigen::Vector3d& p_c, Eigen::Vector2d* uv,
-               Eigen::Matrix<double, 2, 3>* J = nullptr) const;
+  bool project(const Eigen::Vector3d& p_c, Eigen::Vector2d* uv, Eigen::Matrix<double, 2, 3>* J = nullptr) const;
   bool inImage(const Eigen::Vector2d& uv, double border_px = 0.0) const;
 
  private:

@@ -47,21 +47,21 @@ struct EkfSlamConfig {
   CompositionTrigger composition_trigger = CompositionTrigger::kEveryUpdate;
   int composition_new_landmarks = 4;  ///< compose when MORE than this many are new (paper: 4)
   ImuNoiseParams imu_noise;
-  double gravity_mps2 = 9.81;         ///< local gravity magnitude [m/s^2]
-  UpdateParams update;                ///< pixel noise [px] and chi^2 gate probability
+  double gravity_mps2 = 9.81;  ///< local gravity magnitude [m/s^2]
+  UpdateParams update;         ///< pixel noise [px] and chi^2 gate probability
   LandmarkInitMethod landmark_init = LandmarkInitMethod::kInverseDepth;
-  double landmark_depth_m = 8.0;        ///< fixed depth of new landmarks [m]
-  double landmark_depth_sigma_m = 4.0;  ///< std-dev along the ray [m]
-  double inverse_depth_initial_m = 5.0; ///< inverse depth: prior depth 1/rho0 [m]
-  double inverse_depth_sigma = 0.3;     ///< inverse depth: prior std-dev of rho [1/m]
-  int max_landmarks = 300;              ///< map size bound
-  double landmark_timeout_s = 2.0;      ///< drop landmarks not observed for this long [s]; <0: never
-  double max_imu_gap_s = 0.1;           ///< IMU intervals longer than this are gaps [s]
+  double landmark_depth_m = 8.0;         ///< fixed depth of new landmarks [m]
+  double landmark_depth_sigma_m = 4.0;   ///< std-dev along the ray [m]
+  double inverse_depth_initial_m = 5.0;  ///< inverse depth: prior depth 1/rho0 [m]
+  double inverse_depth_sigma = 0.3;      ///< inverse depth: prior std-dev of rho [1/m]
+  int max_landmarks = 300;               ///< map size bound
+  double landmark_timeout_s = 2.0;       ///< drop landmarks not observed for this long [s]; <0: never
+  double max_imu_gap_s = 0.1;            ///< IMU intervals longer than this are gaps [s]
   /// Over a gap the IMU is interpolated, and the motion it missed enters as uncertainty: an
   /// unknown acceleration and angular rate with these std-devs (a walking torso: ~3 m/s^2, 0.3 rad/s).
   double imu_gap_accel_sigma_mps2 = 3.0;
   double imu_gap_gyro_sigma_radps = 0.3;
-  int imu_buffer_max = 4000;            ///< bound on buffered IMU samples
+  int imu_buffer_max = 4000;  ///< bound on buffered IMU samples
   InitialUncertainty initial;
 
   /// Empty if every value is possible, otherwise one line per problem.

@@ -24,7 +24,6 @@ struct UpdateResult {
 
 /// Updates state and covariance with observations of landmarks that are in the map.
 UpdateResult ekfUpdate(FilterState& state, const std::vector<FeatureObservation>& observations,
-                       const CameraModel& camera, const CameraExtrinsics& T_b_c,
-                       const UpdateParams& params);
+                       const CameraModel& camera, const CameraExtrinsics& T_b_c, const UpdateParams& params);
 
 }  // namespace vi_ekf_slam

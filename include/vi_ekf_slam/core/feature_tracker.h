@@ -18,29 +18,29 @@ namespace vi_ekf_slam {
 struct TrackerParams {
   enum class Detector { kShiTomasi, kFast };
   Detector detector = Detector::kShiTomasi;
-  int max_tracks = 150;             ///< target number of tracks
-  int grid_cols = 8;                ///< new corners are spread over this grid
+  int max_tracks = 150;  ///< target number of tracks
+  int grid_cols = 8;     ///< new corners are spread over this grid
   int grid_rows = 6;
-  double min_distance_px = 12.0;    ///< minimum distance between corners [px]
-  double quality_level = 0.01;      ///< Shi-Tomasi quality relative to the best corner
-  int fast_threshold = 20;          ///< FAST intensity threshold [gray levels]
-  int klt_window_px = 15;           ///< KLT window size [px]
-  int klt_pyramid_levels = 3;       ///< KLT pyramid levels above the image
-  double fb_threshold_px = 1.0;     ///< forward-backward error bound [px]
-  double ransac_threshold_px = 1.0; ///< epipolar RANSAC threshold (undistorted) [px]
-  int border_px = 8;                ///< corners this close to the border are dropped [px]
+  double min_distance_px = 12.0;     ///< minimum distance between corners [px]
+  double quality_level = 0.01;       ///< Shi-Tomasi quality relative to the best corner
+  int fast_threshold = 20;           ///< FAST intensity threshold [gray levels]
+  int klt_window_px = 15;            ///< KLT window size [px]
+  int klt_pyramid_levels = 3;        ///< KLT pyramid levels above the image
+  double fb_threshold_px = 1.0;      ///< forward-backward error bound [px]
+  double ransac_threshold_px = 1.0;  ///< epipolar RANSAC threshold (undistorted) [px]
+  int border_px = 8;                 ///< corners this close to the border are dropped [px]
   /// Empty if usable, otherwise what is wrong.
   std::string validate() const;
 };
 std::optional<TrackerParams::Detector> detectorFromString(const std::string& s);
 
 struct TrackerStats {
-  int tracked = 0;         ///< tracks continued from the previous image
-  int lost = 0;            ///< KLT failures and tracks that left the image
-  int fb_rejected = 0;     ///< failed the forward-backward check
-  int ransac_rejected = 0; ///< epipolar outliers
-  int detected = 0;        ///< new tracks
-  int total = 0;           ///< tracks in this image
+  int tracked = 0;          ///< tracks continued from the previous image
+  int lost = 0;             ///< KLT failures and tracks that left the image
+  int fb_rejected = 0;      ///< failed the forward-backward check
+  int ransac_rejected = 0;  ///< epipolar outliers
+  int detected = 0;         ///< new tracks
+  int total = 0;            ///< tracks in this image
 };
 
 class FeatureTracker {

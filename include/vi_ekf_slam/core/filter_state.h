@@ -16,8 +16,8 @@
 namespace vi_ekf_slam {
 
 /// Fixed-capacity matrix for the motion block (15x15 or 21x21) without heap allocation.
-using MotionMatrix = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::ColMajor,
-                                   idx::kMaxMotionDim, idx::kMaxMotionDim>;
+using MotionMatrix =
+    Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::ColMajor, idx::kMaxMotionDim, idx::kMaxMotionDim>;
 using MotionVector = Eigen::Matrix<double, Eigen::Dynamic, 1, Eigen::ColMajor, idx::kMaxMotionDim, 1>;
 
 /// Nominal motion state. In the world-centric filter {s} == {n}, p_n_s == 0 and q_n_s == I.
@@ -92,8 +92,8 @@ class FilterState {
   Eigen::VectorXd boxminus(const FilterState& other) const;
 
   /// Replaces nominal state, map and covariance at once (used by the frame changes).
-  void reset(Mechanization m, const MotionState& x, std::vector<std::int64_t> ids,
-             std::vector<Landmark> landmarks, Eigen::MatrixXd P);
+  void reset(Mechanization m, const MotionState& x, std::vector<std::int64_t> ids, std::vector<Landmark> landmarks,
+             Eigen::MatrixXd P);
 
  private:
   /// P_s'm <- Phi P_s'm, or accumulated into the pending product (lazy cross-covariance).

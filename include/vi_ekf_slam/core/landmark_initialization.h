@@ -16,9 +16,9 @@
 namespace vi_ekf_slam {
 
 struct FixedDepthParams {
-  double depth_m = 8.0;        ///< depth (camera z) of a new landmark [m]
-  double depth_sigma_m = 4.0;  ///< std-dev of that depth [m]
-  double pixel_noise_px = 1.0; ///< std-dev of the observed pixel [px]
+  double depth_m = 8.0;         ///< depth (camera z) of a new landmark [m]
+  double depth_sigma_m = 4.0;   ///< std-dev of that depth [m]
+  double pixel_noise_px = 1.0;  ///< std-dev of the observed pixel [px]
 };
 
 /// Landmark position and its Jacobians w.r.t. body position/orientation error, pixel, depth.
@@ -31,28 +31,26 @@ struct InitializedLandmark {
 };
 
 /// Back-projects pixel uv to depth `depth` (camera z) in the strapdown frame.
-bool backProject(const MotionState& x, const Eigen::Vector2d& uv, double depth,
-                 const CameraModel& camera, const CameraExtrinsics& T_b_c, InitializedLandmark* out);
+bool backProject(const MotionState& x, const Eigen::Vector2d& uv, double depth, const CameraModel& camera,
+                 const CameraExtrinsics& T_b_c, InitializedLandmark* out);
 
 /// Adds the landmark with its covariance and cross-covariance to the state.
-void appendInitializedLandmark(FilterState& state, std::int64_t id, const InitializedLandmark& l,
-                               double pixel_var, double depth_var);
+void appendInitializedLandmark(FilterState& state, std::int64_t id, const InitializedLandmark& l, double pixel_var,
+                               double depth_var);
 
 /// Paper's rule: fixed depth along the ray. False if the pixel cannot be undistorted.
-bool initializeLandmarkFixedDepth(FilterState& state, const FeatureObservation& obs,
-                                  const CameraModel& camera, const CameraExtrinsics& T_b_c,
-                                  const FixedDepthParams& params);
+bool initializeLandmarkFixedDepth(FilterState& state, const FeatureObservation& obs, const CameraModel& camera,
+                                  const CameraExtrinsics& T_b_c, const FixedDepthParams& params);
 
 struct InverseDepthParams {
-  double initial_depth_m = 5.0;       ///< prior mean of the depth, 1 / rho0 [m]
-  double inverse_depth_sigma = 0.3;   ///< prior std-dev of rho [1/m]
-  double pixel_noise_px = 1.0;        ///< std-dev of the observed pixel [px]
+  double initial_depth_m = 5.0;      ///< prior mean of the depth, 1 / rho0 [m]
+  double inverse_depth_sigma = 0.3;  ///< prior std-dev of rho [1/m]
+  double pixel_noise_px = 1.0;       ///< std-dev of the observed pixel [px]
 };
 
 /// Anchored inverse depth; the anchor is the estimated camera frame. False if the pixel cannot
 /// be undistorted.
-bool initializeLandmarkInverseDepth(FilterState& state, const FeatureObservation& obs,
-                                    const CameraModel& camera, const CameraExtrinsics& T_b_c,
-                                    const InverseDepthParams& params);
+bool initializeLandmarkInverseDepth(FilterState& state, const FeatureObservation& obs, const CameraModel& camera,
+                                    const CameraExtrinsics& T_b_c, const InverseDepthParams& params);
 
 }  // namespace vi_ekf_slam

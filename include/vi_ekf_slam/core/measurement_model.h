@@ -30,7 +30,6 @@ Vec3 landmarkInCamera(const MotionState& x, const Vec3& p_s_l, const CameraExtri
 /// Predicts the pixel of a landmark; false if it is behind the camera. Inverse-depth landmarks
 /// are projected through rho * (p_s_l - p_s_c), which stays finite as rho -> 0.
 bool predictObservation(const MotionState& x, const Landmark& landmark, const CameraModel& camera,
-                        const CameraExtrinsics& T_b_c, Eigen::Vector2d* uv,
-                        ObservationJacobians* J = nullptr);
+                        const CameraExtrinsics& T_b_c, Eigen::Vector2d* uv, ObservationJacobians* J = nullptr);
 
 }  // namespace vi_ekf_slam

@@ -53,8 +53,7 @@ inline Mat3 rightJacobianSO3(const Vec3& phi) {
   const Mat3 K = skew(phi);
   if (theta < 1e-6) return Mat3::Identity() - 0.5 * K + K * K / 6.0;
   const double t2 = theta * theta;
-  return Mat3::Identity() - (1.0 - std::cos(theta)) / t2 * K +
-         (theta - std::sin(theta)) / (t2 * theta) * K * K;
+  return Mat3::Identity() - (1.0 - std::cos(theta)) / t2 * K + (theta - std::sin(theta)) / (t2 * theta) * K * K;
 }
 
 /// Orientation error between two rotations in the global (left) convention:

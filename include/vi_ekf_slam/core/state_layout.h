@@ -36,8 +36,6 @@ constexpr int kLandmarkDim = 3;
 }  // namespace idx
 
 /// Error-state dimension of the motion part s' for a mechanization.
-inline int motionDim(Mechanization m) {
-  return isSensorCentric(m) ? idx::kSensorCentricDim : idx::kWorldCentricDim;
-}
+inline int motionDim(Mechanization m) { return isSensorCentric(m) ? idx::kSensorCentricDim : idx::kWorldCentricDim; }
 
 }  // namespace vi_ekf_slam

@@ -10,7 +10,7 @@ namespace vi_ekf_slam {
 
 /// One IMU sample in the body (IMU) frame {b}.
 struct ImuData {
-  double timestamp = 0.0;                       ///< [s]
+  double timestamp = 0.0;                        ///< [s]
   Eigen::Vector3d wm = Eigen::Vector3d::Zero();  ///< measured angular rate [rad/s], eq. (6)
   Eigen::Vector3d am = Eigen::Vector3d::Zero();  ///< measured specific force [m/s^2], eq. (5)
 };

@@ -34,7 +34,7 @@ struct AslImage {
   std::string path;
 };
 std::vector<AslImage> readAslImages(const std::string& cam_folder);  ///< data.csv + data/
-std::vector<ImuData> readAslImu(const std::string& imu_csv);          ///< imu0/data.csv
+std::vector<ImuData> readAslImu(const std::string& imu_csv);         ///< imu0/data.csv
 
 /// Ground truth (state_groundtruth_estimate0/data.csv): body pose in the z-up world, velocity,
 /// biases.

@@ -46,19 +46,19 @@ struct RunMetrics {
   int frames = 0;
   double duration_s = 0.0;
   double distance_m = 0.0;
-  double ate_position_m = 0.0;        ///< registered at the first pose, no fit
-  double ate_posyaw_m = 0.0;          ///< after a least-squares position + yaw fit
+  double ate_position_m = 0.0;  ///< registered at the first pose, no fit
+  double ate_posyaw_m = 0.0;    ///< after a least-squares position + yaw fit
   double ate_orientation_deg = 0.0;
   double final_position_error_m = 0.0;
   double final_position_error_pct = 0.0;
   double nees_position = 0.0, nees_orientation = 0.0, nees_pose = 0.0;  ///< time averages
-  double consistent_fraction = 0.0;   ///< frames with pose NEES inside its 95% chi^2(6) interval
-  double final_scale_ratio = 0.0;     ///< eq. (34) over the final map (NaN if no landmark truth)
-  double map_error_median_m = 0.0;    ///< |landmark - truth| over the final map, registered
+  double consistent_fraction = 0.0;  ///< frames with pose NEES inside its 95% chi^2(6) interval
+  double final_scale_ratio = 0.0;    ///< eq. (34) over the final map (NaN if no landmark truth)
+  double map_error_median_m = 0.0;   ///< |landmark - truth| over the final map, registered
   double map_error_p90_m = 0.0;
-  int map_landmarks = 0;              ///< landmarks of the final map with a known truth
+  int map_landmarks = 0;  ///< landmarks of the final map with a known truth
   double processing_ms_mean = 0.0, processing_ms_p95 = 0.0;
-  double real_time_factor = 0.0;      ///< duration / total processing time
+  double real_time_factor = 0.0;  ///< duration / total processing time
   std::vector<RunFrame> series;
 };
 

@@ -39,8 +39,8 @@ nav_msgs::Odometry toOdometry(const NavState& nav, const Eigen::Vector3d& w_b, d
                               const std::string& world_frame, const std::string& body_frame);
 
 /// TF world -> body.
-geometry_msgs::TransformStamped toTransform(const NavState& nav, const ros::Time& stamp,
-                                            const std::string& world_frame, const std::string& body_frame);
+geometry_msgs::TransformStamped toTransform(const NavState& nav, const ros::Time& stamp, const std::string& world_frame,
+                                            const std::string& body_frame);
 
 /// Landmarks in the world frame as a cloud with fields x y z (float32), id (uint32), sigma
 /// (float32, square root of the largest eigenvalue of the 3x3 covariance [m]), and where the

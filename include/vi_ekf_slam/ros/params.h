@@ -18,15 +18,15 @@ struct NodeOptions {
   std::string world_frame = "world";  ///< fixed frame of the outputs (z up)
   std::string body_frame = "imu";     ///< the IMU/body frame, child of world_frame
   bool publish_tf = true;
-  bool tune_allocator = true;  ///< see core/allocator_tuning.h
-  double camera_time_offset_s = 0.0;  ///< t_imu = t_image + offset [s]
-  std::string camera_calibration_file;  ///< ROS camera YAML used while no camera_info arrives
-  std::string extrinsic_source = "tf";  ///< "tf" (body_frame <- image frame_id) or "parameters"
+  bool tune_allocator = true;                         ///< see core/allocator_tuning.h
+  double camera_time_offset_s = 0.0;                  ///< t_imu = t_image + offset [s]
+  std::string camera_calibration_file;                ///< ROS camera YAML used while no camera_info arrives
+  std::string extrinsic_source = "tf";                ///< "tf" (body_frame <- image frame_id) or "parameters"
   std::vector<double> T_b_c = {0, 0, 0, 0, 0, 0, 1};  ///< x y z qx qy qz qw of the camera in the body [m]
-  int max_image_queue = 20;           ///< images waiting for IMU beyond this are dropped
-  double time_jump_reset_s = 1.0;     ///< a stamp this far backwards resets the filter [s]
-  int path_max_length = 2000;         ///< poses kept in the published path
-  double max_image_gap_s = 0.5;       ///< longer gaps between processed images are reported [s]
+  int max_image_queue = 20;                           ///< images waiting for IMU beyond this are dropped
+  double time_jump_reset_s = 1.0;                     ///< a stamp this far backwards resets the filter [s]
+  int path_max_length = 2000;                         ///< poses kept in the published path
+  double max_image_gap_s = 0.5;                       ///< longer gaps between processed images are reported [s]
 };
 
 struct NodeParams {

@@ -28,22 +28,22 @@ struct Quad {
 };
 
 struct HallwayParams {
-  double standing_s = 0.0;          ///< the rig stands still this long before walking (static init)
-  double duration_s = 35.0;         ///< all times are from the start, standing included
-  double speed_mps = 1.3;           ///< walking speed
-  double turn_time_s = 23.0;        ///< middle of the 90 deg right turn
-  double turn_radius_m = 0.6;       ///< a sharp turn
-  double turn_speed_mps = 0.9;      ///< walkers slow down in a sharp turn
+  double standing_s = 0.0;      ///< the rig stands still this long before walking (static init)
+  double duration_s = 35.0;     ///< all times are from the start, standing included
+  double speed_mps = 1.3;       ///< walking speed
+  double turn_time_s = 23.0;    ///< middle of the 90 deg right turn
+  double turn_radius_m = 0.6;   ///< a sharp turn
+  double turn_speed_mps = 0.9;  ///< walkers slow down in a sharp turn
   double main_width_m = 2.4;
-  double side_width_m = 1.4;        ///< the narrow side corridor
+  double side_width_m = 1.4;  ///< the narrow side corridor
   double height_m = 2.6;
-  double body_height_m = 1.3;       ///< IMU above the floor
-  double step_frequency_hz = 1.9;   ///< steps per second (two per stride)
-  double bounce_m = 0.025;          ///< vertical amplitude at the step frequency
-  double sway_m = 0.03;             ///< lateral amplitude at the stride frequency
-  double yaw_sway_rad = 0.035;      ///< torso yaw oscillation (~2 deg)
-  double roll_sway_rad = 0.026;     ///< torso roll oscillation (~1.5 deg)
-  double pitch_bob_rad = 0.017;     ///< torso pitch at the step frequency (~1 deg)
+  double body_height_m = 1.3;      ///< IMU above the floor
+  double step_frequency_hz = 1.9;  ///< steps per second (two per stride)
+  double bounce_m = 0.025;         ///< vertical amplitude at the step frequency
+  double sway_m = 0.03;            ///< lateral amplitude at the stride frequency
+  double yaw_sway_rad = 0.035;     ///< torso yaw oscillation (~2 deg)
+  double roll_sway_rad = 0.026;    ///< torso roll oscillation (~1.5 deg)
+  double pitch_bob_rad = 0.017;    ///< torso pitch at the step frequency (~1 deg)
 };
 
 /// The centreline geometry: where the side corridor branches off (x of its axis, {n}).

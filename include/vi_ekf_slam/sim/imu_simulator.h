@@ -13,7 +13,7 @@ namespace vi_ekf_slam::sim {
 
 struct ImuSimParams {
   double rate_hz = 200.0;
-  ImuNoiseParams noise;             ///< densities [SI / sqrt(Hz)]
+  ImuNoiseParams noise;                        ///< densities [SI / sqrt(Hz)]
   double initial_accel_bias_sigma_mps2 = 0.0;  ///< std-dev of the initial bias draw
   double initial_gyro_bias_sigma_radps = 0.0;
   bool noise_enabled = true;

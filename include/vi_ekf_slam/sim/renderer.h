@@ -14,10 +14,10 @@
 namespace vi_ekf_slam::sim {
 
 struct RenderParams {
-  double texel_m = 0.01;          ///< texture resolution [m]
-  double noise_sigma = 2.0;       ///< per-pixel Gaussian intensity noise [gray levels]
-  int motion_blur_samples = 1;    ///< > 1: average this many renders over the exposure
-  double exposure_s = 0.008;      ///< exposure time for motion blur [s]
+  double texel_m = 0.01;        ///< texture resolution [m]
+  double noise_sigma = 2.0;     ///< per-pixel Gaussian intensity noise [gray levels]
+  int motion_blur_samples = 1;  ///< > 1: average this many renders over the exposure
+  double exposure_s = 0.008;    ///< exposure time for motion blur [s]
   std::uint64_t texture_seed = 1;
 };
 

@@ -16,7 +16,7 @@ struct TrajectorySample {
   Vec3 v_n_b = Vec3::Zero();  ///< [m/s]
   Vec3 a_n_b = Vec3::Zero();  ///< kinematic acceleration in {n} [m/s^2]
   Quat q_n_b = Quat::Identity();
-  Vec3 w_b = Vec3::Zero();    ///< angular rate of {b} w.r.t. {n}, in {b} [rad/s]
+  Vec3 w_b = Vec3::Zero();  ///< angular rate of {b} w.r.t. {n}, in {b} [rad/s]
 };
 
 class Trajectory {
