@@ -27,10 +27,12 @@ RVIZ ?= 0
 TRAJECTORY ?= builtin
 IMU        ?=
 IMU_NOISE  ?= datasheet
-RUNS       ?= 50
+#   PRESET=openvins_sim: OpenVINS's simulator setup on TRAJECTORY (5 runs unless RUNS= is given)
+PRESET     ?=
+RUNS       ?= $(if $(PRESET),5,50)
 SEED       ?= 1
 CONFIGS    ?= all
-OUT        ?= results/study/$(if $(IMU),real_imu_$(IMU_NOISE)_$(notdir $(abspath $(dir $(TRAJECTORY))/../..)),$(basename $(notdir $(TRAJECTORY))))
+OUT        ?= results/study/$(if $(PRESET),$(PRESET)_)$(if $(IMU),real_imu_$(IMU_NOISE)_$(notdir $(abspath $(dir $(TRAJECTORY))/../..)),$(basename $(notdir $(TRAJECTORY))))
 
 all: build
 
@@ -100,7 +102,7 @@ demo: build $(BAG)
 
 # The plots of the built-in walk and of the TUM corridor are copied to docs/img for the README.
 study: build
-	$(BIN)/vi_ekf_slam_study --trajectory $(TRAJECTORY) --runs $(RUNS) --seed $(SEED) --configs $(CONFIGS) --out $(OUT) $(if $(IMU),--imu $(IMU) --imu-noise $(IMU_NOISE))
+	$(BIN)/vi_ekf_slam_study --trajectory $(TRAJECTORY) --runs $(RUNS) --seed $(SEED) --configs $(CONFIGS) --out $(OUT) $(if $(IMU),--imu $(IMU) --imu-noise $(IMU_NOISE)) $(if $(PRESET),--preset $(PRESET))
 	python3 tools/plot_study.py $(OUT) $(if $(filter builtin %tum_corridor1_512_16_okvis.txt,$(TRAJECTORY)),--docs docs/img --prefix study_$(basename $(notdir $(TRAJECTORY))))
 
 # Benchmarks (numbers, not pass/fail), pinned to one core: core operations against the map size

@@ -38,9 +38,11 @@ struct RunResult {
   std::vector<FrameMetrics> frames;
   std::map<std::int64_t, Vec3> landmark_estimates;  ///< last estimate of every landmark in {n}
   double ate_position_m = 0.0;
+  double ate_posyaw_m = 0.0;  ///< after the 4-DoF (yaw + translation) alignment
   double ate_orientation_deg = 0.0;
   double final_position_error_m = 0.0;
   double distance_m = 0.0;
+  double real_time_factor = 0.0;  ///< data duration / filter time (propagation, update, init)
 };
 
 /// Draws the initial estimate: truth minus an error ~ N(0, P0) of the world-centric prior
@@ -55,6 +57,8 @@ struct ConsistencySummary {
   std::string name;
   int runs = 0;
   double ate_position_m = 0.0;       ///< mean over runs of the per-run position RMSE
+  double ate_posyaw_m = 0.0;         ///< the same after posyaw alignment
+  double real_time_factor = 0.0;     ///< mean over runs
   double ate_orientation_deg = 0.0;  ///< mean over runs of the per-run orientation RMSE
   double final_position_error_m = 0.0;
   double final_position_error_pct = 0.0;  ///< of the distance walked
