@@ -38,6 +38,11 @@ RunResult runMonteCarloRun(const Scenario& scenario_in, const EkfSlamConfig& con
   const double t0 = std::max(0.0, sc.trajectory->startTime());
   const NavState truth0 = trueNavState(*sc.trajectory, t0);
   NavState init = drawInitialEstimate(truth0, config.initial, rng);
+  if (sc.start_at_truth) {
+    init = truth0;
+    sc.imu.initial_accel_bias_sigma_mps2 = 0.0;
+    sc.imu.initial_gyro_bias_sigma_radps = 0.0;
+  }
   if (sc.recorded_imu) {
     // A real IMU has the biases it has: start from the true ones (when the ground truth knows
     // them) minus an error drawn from the filter's prior, as the simulated runs do.

@@ -48,6 +48,7 @@ Scenario openvinsSimScenario(const std::string& tum_path, std::uint64_t world_se
   sc.imu.noise.gyro_random_walk = 1.9393e-5;
   sc.imu.noise.accel_noise_density = 2.0e-3;
   sc.imu.noise.accel_random_walk = 3.0e-3;
+  sc.start_at_truth = true;
   sc.cam.rate_hz = 10.0;
   sc.cam.pixel_noise_px = 1.0;
   sc.cam.max_range_m = 10.0;

@@ -2,7 +2,7 @@
 // study numbers can be set beside theirs (issue 6): IMU 400 Hz, camera 10 Hz, 752x480 with the
 // EuRoC cam0 intrinsics, radial-tangential distortion and camera-IMU transform, 1 px noise, their
 // IMU noise densities, map points generated 5-7 m in front of the camera, and a start from the
-// true state with 1 deg, 5 cm, 1 cm/s initial sigmas.
+// true state (no drawn error, zero initial biases) with 1 deg, 5 cm, 1 cm/s initial sigmas.
 #pragma once
 
 #include <cstdint>

@@ -26,6 +26,9 @@ struct Scenario {
   /// A recorded IMU stream to use instead of synthesizing one from the trajectory (see
   /// recorded_imu.h); its true biases are NaN where the ground truth does not know them.
   std::shared_ptr<const ImuSequence> recorded_imu;
+  /// Monte-Carlo runs start from the true state (zero biases, no drawn initial error; the
+  /// filter's initial covariance is only its belief), as OpenVINS's simulator does.
+  bool start_at_truth = false;
 };
 
 /// One camera time of a run.
