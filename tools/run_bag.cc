@@ -18,6 +18,7 @@
 #include <rosbag/bag.h>
 #include <rosbag/view.h>
 #include <tf2/buffer_core.h>
+#include <tf2_eigen/tf2_eigen.h>
 #include <tf2_msgs/TFMessage.h>
 #include <sensor_msgs/point_cloud2_iterator.h>
 #include <sstream>
@@ -44,9 +45,8 @@ class RecordingSink : public glue::OutputSink {
   void odometry(const nav_msgs::Odometry& o) override {
     eval::EstimatedPose p;
     p.t = o.header.stamp.toSec();
-    p.p = Vec3(o.pose.pose.position.x, o.pose.pose.position.y, o.pose.pose.position.z);
-    p.q = Quat(o.pose.pose.orientation.w, o.pose.pose.orientation.x, o.pose.pose.orientation.y,
-               o.pose.pose.orientation.z);
+    tf2::fromMsg(o.pose.pose.position, p.p);
+    tf2::fromMsg(o.pose.pose.orientation, p.q);
     for (int i = 0; i < 6; ++i)
       for (int j = 0; j < 6; ++j) p.cov(i, j) = o.pose.covariance[static_cast<size_t>(6 * i + j)];
     poses.push_back(p);

@@ -46,6 +46,7 @@ struct Options {
   double density = 1.0;     // landmarks per m^2 of wall (built-in walk)
   double per_metre = 15.0;  // landmarks per metre of path (TUM trajectories)
   double max_duration = 0;  // truncate TUM trajectories [s], 0 = whole file
+  double start_offset = 0;  // start this long after the file's first pose [s]
   std::string imu;          // recorded IMU (ASL imu0/data.csv) instead of a synthesized one
   std::string imu_noise = "datasheet";
   std::string preset;  // "" or openvins_sim
@@ -55,7 +56,7 @@ struct Options {
   std::cerr << "error: " << err << "\n"
             << "usage: vi_ekf_slam_study --trajectory builtin|FILE [--runs N] [--seed S] [--out DIR]\n"
                "       [--configs paper|all|NAME,...] [--threads N] [--density PER_M2] [--per-metre N]\n"
-               "       [--max-duration S] [--imu ASL_IMU_CSV] [--imu-noise datasheet|euroc_mav]\n";
+               "       [--start-offset S] [--max-duration S] [--imu ASL_IMU_CSV] [--imu-noise datasheet|euroc_mav]\n";
   std::exit(2);
 }
 
@@ -84,6 +85,8 @@ Options parse(int argc, char** argv) {
         o.per_metre = std::stod(v);
       else if (k == "--max-duration")
         o.max_duration = std::stod(v);
+      else if (k == "--start-offset")
+        o.start_offset = std::stod(v);
       else if (k == "--imu")
         o.imu = v;
       else if (k == "--imu-noise")
@@ -98,6 +101,8 @@ Options parse(int argc, char** argv) {
   }
   if (o.runs < 2) usage("--runs must be >= 2 (NEES bands need several runs)");
   if (o.threads < 1) usage("--threads must be >= 1");
+  if (o.start_offset < 0.0 || o.max_duration < 0.0) usage("--start-offset and --max-duration must be >= 0");
+  if (o.start_offset > 0.0 && !o.imu.empty()) usage("--start-offset is for synthesized IMU only");
   if (o.imu_noise != "datasheet" && o.imu_noise != "euroc_mav") usage("--imu-noise must be datasheet or euroc_mav");
   if (!o.preset.empty() && o.preset != "openvins_sim") usage("unknown --preset '" + o.preset + "'");
   if (!o.preset.empty() && (o.trajectory == "builtin" || !o.imu.empty())) usage("--preset needs a TUM --trajectory");
@@ -228,9 +233,10 @@ int main(int argc, char** argv) {
     std::cerr << "error: " << e.what() << "\n";
     return 1;
   }
-  if (o.max_duration > 0.0) {
-    sc.trajectory =
-        std::make_shared<sim::TruncatedTrajectory>(sc.trajectory, sc.trajectory->startTime() + o.max_duration);
+  if (o.max_duration > 0.0 || o.start_offset > 0.0) {
+    const double start = sc.trajectory->startTime() + o.start_offset;
+    const double end = o.max_duration > 0.0 ? start + o.max_duration : sc.trajectory->endTime();
+    sc.trajectory = std::make_shared<sim::TruncatedTrajectory>(sc.trajectory, start, end);
   }
   const auto configs = makeConfigs(o, sc);
   const double duration = sc.trajectory->endTime() - std::max(0.0, sc.trajectory->startTime());

@@ -143,33 +143,59 @@ void FeatureTracker::detect(const cv::Mat& img) {
   cv::Mat mask(img.size(), CV_8UC1, cv::Scalar(0));
   const int b = params_.border_px;
   mask(cv::Rect(b, b, img.cols - 2 * b, img.rows - 2 * b)).setTo(255);
+  const int radius = static_cast<int>(params_.min_distance_px);
   for (const auto& t : tracks_) {
     ++count[static_cast<size_t>(cellOf(t.uv))];
-    cv::circle(mask, t.uv, static_cast<int>(params_.min_distance_px), cv::Scalar(0), -1);
+    cv::circle(mask, t.uv, radius, cv::Scalar(0), -1);
   }
-  // Candidates, strongest first.
-  std::vector<cv::Point2f> cand;
+  // Candidates come only from the cells below their quota, each searched in its own region of
+  // interest (in steady tracking most cells are full, so this costs a fraction of a whole-image
+  // search). They are then taken strongest first over all those cells, as from one search of
+  // the free area: a corner must reach quality_level times the best response found, and only
+  // the strongest few (4 per wanted track) are considered, so weakly textured cells do not get
+  // corners that track poorly.
   const int want = params_.max_tracks - static_cast<int>(tracks_.size());
-  if (params_.detector == TrackerParams::Detector::kShiTomasi) {
-    cv::goodFeaturesToTrack(img, cand, std::max(want * 4, 64), params_.quality_level, params_.min_distance_px, mask, 3);
-  } else {
-    std::vector<cv::KeyPoint> kps;
-    cv::FAST(img, kps, params_.fast_threshold, true);
-    std::sort(kps.begin(), kps.end(), [](const auto& a, const auto& c) { return a.response > c.response; });
-    for (const auto& k : kps) {
-      if (mask.at<uchar>(cv::Point(k.pt)) == 0) continue;
-      cand.push_back(k.pt);
-      cv::circle(mask, k.pt, static_cast<int>(params_.min_distance_px), cv::Scalar(0), -1);
+  const int max_candidates = std::max(want * 4, 64);
+  struct Candidate {
+    cv::Point2f p;
+    float response;
+  };
+  std::vector<Candidate> cand;
+  for (int c = 0; c < cells; ++c) {
+    if (count[static_cast<size_t>(c)] >= quota) continue;
+    const int x0 = (c % cols) * img.cols / cols, x1 = (c % cols + 1) * img.cols / cols;
+    const int y0 = (c / cols) * img.rows / rows, y1 = (c / cols + 1) * img.rows / rows;
+    const cv::Rect roi(x0, y0, x1 - x0, y1 - y0);
+    const cv::Point2f offset(static_cast<float>(x0), static_cast<float>(y0));
+    if (params_.detector == TrackerParams::Detector::kShiTomasi) {
+      if (cv::countNonZero(mask(roi)) == 0) continue;
+      std::vector<cv::Point2f> pts;
+      std::vector<float> quality;
+      // The quality floor is applied below against the best of all cells, not this one's.
+      cv::goodFeaturesToTrack(img(roi), pts, max_candidates, 1e-3, params_.min_distance_px, mask(roi), quality, 3);
+      for (size_t i = 0; i < pts.size(); ++i) cand.push_back({pts[i] + offset, quality[i]});
+    } else {
+      std::vector<cv::KeyPoint> kps;
+      cv::FAST(img(roi), kps, params_.fast_threshold, true);
+      for (const auto& k : kps) cand.push_back({k.pt + offset, k.response});
     }
   }
-  // Fill the emptiest cells first: a cell takes candidates up to its quota.
-  int added = 0;
-  for (const auto& p : cand) {
-    if (added >= want) break;
-    const size_t c = static_cast<size_t>(cellOf(p));
+  std::sort(cand.begin(), cand.end(), [](const Candidate& a, const Candidate& b) { return a.response > b.response; });
+  if (params_.detector == TrackerParams::Detector::kShiTomasi && !cand.empty()) {
+    const float floor = static_cast<float>(params_.quality_level) * cand.front().response;
+    while (!cand.empty() && cand.back().response < floor) cand.pop_back();
+  }
+  // Fill the cells up to their quota, strongest candidates first, min_distance_px apart.
+  int added = 0, considered = 0;
+  for (const auto& k : cand) {
+    if (added >= want || considered >= max_candidates) break;
+    if (mask.at<uchar>(cv::Point(k.p)) == 0) continue;
+    ++considered;
+    const size_t c = static_cast<size_t>(cellOf(k.p));
     if (count[c] >= quota) continue;
     ++count[c];
-    tracks_.push_back({next_id_++, p, 1, {p}});
+    cv::circle(mask, k.p, radius, cv::Scalar(0), -1);
+    tracks_.push_back({next_id_++, k.p, 1, {k.p}});
     ++added;
   }
   stats_.detected = added;

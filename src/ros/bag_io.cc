@@ -4,6 +4,7 @@
 #include <sensor_msgs/CameraInfo.h>
 #include <sensor_msgs/Imu.h>
 #include <std_msgs/String.h>
+#include <tf2_eigen/tf2_eigen.h>
 #include <tf2_msgs/TFMessage.h>
 #include <rosbag/view.h>
 #include <algorithm>
@@ -27,14 +28,8 @@ RigBagWriter::RigBagWriter(const std::string& path, const RigTopics& topics, con
   T.header.stamp = start;
   T.header.frame_id = topics.imu_frame;
   T.child_frame_id = topics.camera_frame;
-  const Quat q(T_b_c.R_b_c);
-  T.transform.translation.x = T_b_c.p_b_c.x();
-  T.transform.translation.y = T_b_c.p_b_c.y();
-  T.transform.translation.z = T_b_c.p_b_c.z();
-  T.transform.rotation.w = q.w();
-  T.transform.rotation.x = q.x();
-  T.transform.rotation.y = q.y();
-  T.transform.rotation.z = q.z();
+  tf2::toMsg(T_b_c.p_b_c, T.transform.translation);
+  T.transform.rotation = tf2::toMsg(Quat(T_b_c.R_b_c));
   tf.transforms.push_back(T);
   bag_.write("/tf_static", start, tf);
 }
@@ -79,13 +74,8 @@ void RigBagWriter::groundTruth(double t, const Vec3& p, const Quat& q) {
   geometry_msgs::PoseStamped g;
   g.header.stamp = ros::Time(t);
   g.header.frame_id = topics_.world_frame;
-  g.pose.position.x = p.x();
-  g.pose.position.y = p.y();
-  g.pose.position.z = p.z();
-  g.pose.orientation.w = q.w();
-  g.pose.orientation.x = q.x();
-  g.pose.orientation.y = q.y();
-  g.pose.orientation.z = q.z();
+  g.pose.position = tf2::toMsg(p);
+  g.pose.orientation = tf2::toMsg(q);
   bag_.write(topics_.ground_truth, g.header.stamp, g);
 }
 
@@ -112,9 +102,9 @@ InputBagInfo readInputBag(const std::string& path, const RigTopics& topics) {
     if (auto g = m.instantiate<geometry_msgs::PoseStamped>()) {
       eval::StampedPose p;
       p.t = g->header.stamp.toSec();
-      p.p = Vec3(g->pose.position.x, g->pose.position.y, g->pose.position.z);
-      p.q =
-          Quat(g->pose.orientation.w, g->pose.orientation.x, g->pose.orientation.y, g->pose.orientation.z).normalized();
+      tf2::fromMsg(g->pose.position, p.p);
+      tf2::fromMsg(g->pose.orientation, p.q);
+      p.q.normalize();
       info.truth.push_back(p);
     } else if (auto w = m.instantiate<std_msgs::String>()) {
       if (m.getTopic() == "/sim/world") info.world = sim::parseQuads(w->data);

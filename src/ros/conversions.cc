@@ -7,6 +7,7 @@
 #include <sensor_msgs/image_encodings.h>
 #include <sensor_msgs/point_cloud2_iterator.h>
 #include <sstream>
+#include <tf2_eigen/tf2_eigen.h>
 
 #include "vi_ekf_slam/core/frames.h"
 #include "vi_ekf_slam/ros/ekf_slam_processor.h"
@@ -90,9 +91,10 @@ std::string toMono8(const sensor_msgs::Image& msg, cv::Mat* out) {
 
 CameraExtrinsics extrinsicsFromTransform(const geometry_msgs::Transform& t) {
   CameraExtrinsics T;
-  const Quat q(t.rotation.w, t.rotation.x, t.rotation.y, t.rotation.z);
+  Quat q;
+  tf2::fromMsg(t.rotation, q);
   T.R_b_c = q.normalized().toRotationMatrix();
-  T.p_b_c = Vec3(t.translation.x, t.translation.y, t.translation.z);
+  tf2::fromMsg(t.translation, T.p_b_c);
   return T;
 }
 
@@ -105,13 +107,8 @@ nav_msgs::Odometry toOdometry(const NavState& nav, const Eigen::Vector3d& w_b, d
   Vec3 p_w;
   Quat q_w_b;
   navToZUpWorld(nav.p_n_b, nav.q_n_b, &p_w, &q_w_b);
-  o.pose.pose.position.x = p_w.x();
-  o.pose.pose.position.y = p_w.y();
-  o.pose.pose.position.z = p_w.z();
-  o.pose.pose.orientation.w = q_w_b.w();
-  o.pose.pose.orientation.x = q_w_b.x();
-  o.pose.pose.orientation.y = q_w_b.y();
-  o.pose.pose.orientation.z = q_w_b.z();
+  o.pose.pose.position = tf2::toMsg(p_w);
+  o.pose.pose.orientation = tf2::toMsg(q_w_b);
   // Pose covariance [position, orientation] in the world frame: both blocks rotate with R_w_n
   // (the orientation error is a global rotation vector).
   const Mat3 R_w_n = zUpWorldFromNav().toRotationMatrix();
@@ -122,12 +119,8 @@ nav_msgs::Odometry toOdometry(const NavState& nav, const Eigen::Vector3d& w_b, d
   // Twist in the body frame: v_b = R_n_b^T v_n.
   const Mat3 R_b_n = nav.q_n_b.conjugate().toRotationMatrix();
   const Vec3 v_b = R_b_n * nav.v_n_b;
-  o.twist.twist.linear.x = v_b.x();
-  o.twist.twist.linear.y = v_b.y();
-  o.twist.twist.linear.z = v_b.z();
-  o.twist.twist.angular.x = w_b.x();
-  o.twist.twist.angular.y = w_b.y();
-  o.twist.twist.angular.z = w_b.z();
+  tf2::toMsg(v_b, o.twist.twist.linear);
+  tf2::toMsg(Vec3(w_b), o.twist.twist.angular);
   Eigen::Matrix<double, 6, 6> Tw = Eigen::Matrix<double, 6, 6>::Zero();
   // v_b = R^T v_n -> cov R^T P_v R (+ the attitude term, small at walking speed; omitted).
   Tw.topLeftCorner<3, 3>() = R_b_n * nav.cov.block<3, 3>(idx::kV, idx::kV) * R_b_n.transpose();
@@ -150,13 +143,8 @@ geometry_msgs::TransformStamped toTransform(const NavState& nav, const ros::Time
   Vec3 p_w;
   Quat q_w_b;
   navToZUpWorld(nav.p_n_b, nav.q_n_b, &p_w, &q_w_b);
-  t.transform.translation.x = p_w.x();
-  t.transform.translation.y = p_w.y();
-  t.transform.translation.z = p_w.z();
-  t.transform.rotation.w = q_w_b.w();
-  t.transform.rotation.x = q_w_b.x();
-  t.transform.rotation.y = q_w_b.y();
-  t.transform.rotation.z = q_w_b.z();
+  tf2::toMsg(p_w, t.transform.translation);
+  t.transform.rotation = tf2::toMsg(q_w_b);
   return t;
 }
 

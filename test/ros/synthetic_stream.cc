@@ -17,6 +17,7 @@
 #include <sensor_msgs/Image.h>
 #include <sensor_msgs/Imu.h>
 #include <sensor_msgs/image_encodings.h>
+#include <tf2_eigen/tf2_eigen.h>
 #include <tf2_ros/static_transform_broadcaster.h>
 
 #include <cv_bridge/cv_bridge.h>
@@ -105,14 +106,8 @@ int main(int argc, char** argv) {
   T.header.stamp = ros::Time::now();
   T.header.frame_id = "imu";
   T.child_frame_id = "camera";
-  const Quat q_b_c(sc.T_b_c.R_b_c);
-  T.transform.translation.x = sc.T_b_c.p_b_c.x();
-  T.transform.translation.y = sc.T_b_c.p_b_c.y();
-  T.transform.translation.z = sc.T_b_c.p_b_c.z();
-  T.transform.rotation.w = q_b_c.w();
-  T.transform.rotation.x = q_b_c.x();
-  T.transform.rotation.y = q_b_c.y();
-  T.transform.rotation.z = q_b_c.z();
+  tf2::toMsg(sc.T_b_c.p_b_c, T.transform.translation);
+  T.transform.rotation = tf2::toMsg(Quat(sc.T_b_c.R_b_c));
   tf_static.sendTransform(T);
   ros::Duration(1.5).sleep();  // let the filter and the checker connect
 
@@ -192,13 +187,8 @@ int main(int argc, char** argv) {
       Quat q_w_b;
       const sim::TrajectorySample s = sc.trajectory->sample(t);
       navToZUpWorld(s.p_n_b, s.q_n_b, &p_w, &q_w_b);
-      gt.pose.position.x = p_w.x();
-      gt.pose.position.y = p_w.y();
-      gt.pose.position.z = p_w.z();
-      gt.pose.orientation.w = q_w_b.w();
-      gt.pose.orientation.x = q_w_b.x();
-      gt.pose.orientation.y = q_w_b.y();
-      gt.pose.orientation.z = q_w_b.z();
+      gt.pose.position = tf2::toMsg(p_w);
+      gt.pose.orientation = tf2::toMsg(q_w_b);
       gt_pub.publish(gt);
     }
   }

@@ -265,3 +265,18 @@ TEST(BsplineTrajectory, ClearErrorsForBadFiles) {
     EXPECT_NE(std::string(e.what()).find("at least 4"), std::string::npos) << e.what();
   }
 }
+
+TEST(Simulator, TruncatedTrajectoryIsATimeWindowOfItsBase) {
+  const auto walk = sim::pedestrianWalk(sim::HallwayParams());
+  const sim::TruncatedTrajectory window(walk, 10.0, 20.0);
+  EXPECT_DOUBLE_EQ(window.startTime(), 10.0);
+  EXPECT_DOUBLE_EQ(window.endTime(), 20.0);
+  for (double t : {10.0, 12.5, 20.0}) {
+    EXPECT_LT((window.sample(t).p_n_b - walk->sample(t).p_n_b).norm(), 1e-12);
+  }
+  // Outside the window the motion holds at its ends; a window beyond the base is clamped to it.
+  EXPECT_LT((window.sample(25.0).p_n_b - walk->sample(20.0).p_n_b).norm(), 1e-12);
+  const sim::TruncatedTrajectory past(walk, walk->endTime() + 5.0, walk->endTime() + 9.0);
+  EXPECT_DOUBLE_EQ(past.startTime(), walk->endTime());
+  EXPECT_DOUBLE_EQ(past.endTime(), walk->endTime());
+}

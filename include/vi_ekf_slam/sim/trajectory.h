@@ -56,17 +56,23 @@ class LissajousTrajectory : public Trajectory {
   double duration_;
 };
 
-/// The part of another trajectory up to `end_time` (e.g. the first minute of a long file).
+/// The part of another trajectory between `start_time` and `end_time` (e.g. the first minute of a
+/// long file, or a start while already walking).
 class TruncatedTrajectory : public Trajectory {
  public:
   TruncatedTrajectory(std::shared_ptr<const Trajectory> base, double end_time)
-      : base_(std::move(base)), end_(std::min(end_time, base_->endTime())) {}
-  double startTime() const override { return base_->startTime(); }
+      : TruncatedTrajectory(base, base->startTime(), end_time) {}
+  TruncatedTrajectory(std::shared_ptr<const Trajectory> base, double start_time, double end_time)
+      : base_(std::move(base)),
+        start_(std::clamp(start_time, base_->startTime(), base_->endTime())),
+        end_(std::clamp(end_time, start_, base_->endTime())) {}
+  double startTime() const override { return start_; }
   double endTime() const override { return end_; }
-  TrajectorySample sample(double t) const override { return base_->sample(std::min(t, end_)); }
+  TrajectorySample sample(double t) const override { return base_->sample(std::clamp(t, start_, end_)); }
 
  private:
   std::shared_ptr<const Trajectory> base_;
+  double start_;
   double end_;
 };
 
