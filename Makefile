@@ -32,6 +32,8 @@ PRESET     ?=
 RUNS       ?= $(if $(PRESET),5,50)
 SEED       ?= 1
 CONFIGS    ?= all
+#   STUDY_ARGS: more options of vi_ekf_slam_study, e.g. "--start-offset 10 --max-landmarks 150"
+STUDY_ARGS ?=
 OUT        ?= results/study/$(if $(PRESET),$(PRESET)_)$(if $(IMU),real_imu_$(IMU_NOISE)_$(notdir $(abspath $(dir $(TRAJECTORY))/../..)),$(basename $(notdir $(TRAJECTORY))))
 
 all: build
@@ -102,7 +104,7 @@ demo: build $(BAG)
 
 # The plots of the built-in walk and of the TUM corridor are copied to docs/img for the README.
 study: build
-	$(BIN)/vi_ekf_slam_study --trajectory $(TRAJECTORY) --runs $(RUNS) --seed $(SEED) --configs $(CONFIGS) --out $(OUT) $(if $(IMU),--imu $(IMU) --imu-noise $(IMU_NOISE)) $(if $(PRESET),--preset $(PRESET))
+	$(BIN)/vi_ekf_slam_study --trajectory $(TRAJECTORY) --runs $(RUNS) --seed $(SEED) --configs $(CONFIGS) --out $(OUT) $(if $(IMU),--imu $(IMU) --imu-noise $(IMU_NOISE)) $(if $(PRESET),--preset $(PRESET)) $(STUDY_ARGS)
 	python3 tools/plot_study.py $(OUT) $(if $(filter builtin %tum_corridor1_512_16_okvis.txt,$(TRAJECTORY)),--docs docs/img --prefix study_$(basename $(notdir $(TRAJECTORY))))
 
 # Benchmarks (numbers, not pass/fail), pinned to one core: core operations against the map size

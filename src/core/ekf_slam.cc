@@ -111,16 +111,19 @@ bool EkfSlam::propagateTo(double t) {
 }
 
 void EkfSlam::addGapUncertainty(double dt) {
-  // An unknown constant acceleration a ~ N(0, sa^2 I) over dt moves v by a dt and p by a dt^2/2;
-  // an unknown rate turns the attitude by w dt.
+  // An unknown acceleration of size sa ~ N(0, sa^2 I) over dt moves v by up to a dt and p by
+  // a dt^2/2; an unknown rate turns the attitude by w dt. The position and velocity parts are
+  // kept uncorrelated: a walking torso's acceleration swings within a gap, so the velocity it
+  // ends with does not follow from how far it went. (A constant-acceleration model would make
+  // them fully correlated, and the first image after the gap would then fix the velocity from
+  // the position alone, wrongly and with confidence: the gate then rejects every later
+  // observation. SensorFaults.FilterRidesThroughDropoutGapOutliersAndCoveredCamera.)
   using namespace idx;
   const int m = state_.motionDim();
   const double sa = config_.imu_gap_accel_sigma_mps2, sg = config_.imu_gap_gyro_sigma_radps;
   MotionMatrix Q = MotionMatrix::Zero(m, m);
   const double qa = sa * sa;
   Q.block<3, 3>(kP, kP).diagonal().setConstant(qa * std::pow(dt, 4) / 4.0);
-  Q.block<3, 3>(kP, kV).diagonal().setConstant(qa * std::pow(dt, 3) / 2.0);
-  Q.block<3, 3>(kV, kP).diagonal().setConstant(qa * std::pow(dt, 3) / 2.0);
   Q.block<3, 3>(kV, kV).diagonal().setConstant(qa * dt * dt);
   Q.block<3, 3>(kPsi, kPsi).diagonal().setConstant(sg * sg * dt * dt);
   state_.propagateCovariance(MotionMatrix::Identity(m, m), Q);

@@ -15,6 +15,41 @@ NavState trueNavState(const Trajectory& trajectory, double t) {
   return n;
 }
 
+std::string toString(SensorFault::Kind kind) {
+  switch (kind) {
+    case SensorFault::Kind::kImageDropout:
+      return "image_dropout";
+    case SensorFault::Kind::kImuGap:
+      return "imu_gap";
+    case SensorFault::Kind::kOutlierBurst:
+      return "outlier_burst";
+    case SensorFault::Kind::kCameraCovered:
+      return "camera_covered";
+  }
+  return "unknown";
+}
+
+namespace {
+
+const SensorFault* activeFault(const std::vector<SensorFault>& faults, SensorFault::Kind kind, double t) {
+  for (const auto& f : faults) {
+    if (f.kind == kind && f.covers(t)) return &f;
+  }
+  return nullptr;
+}
+
+/// Mistracks a fraction of the features: each chosen one jumps 20-60 px in a random direction.
+void corruptFeatures(CameraFrame& frame, double fraction, std::mt19937_64& rng) {
+  std::uniform_real_distribution<double> u(0.0, 1.0);
+  for (auto& f : frame.features) {
+    if (u(rng) >= fraction) continue;
+    const double r = 20.0 + 40.0 * u(rng), a = 2.0 * M_PI * u(rng);
+    f.uv += r * Eigen::Vector2d(std::cos(a), std::sin(a));
+  }
+}
+
+}  // namespace
+
 SimRun runSimulation(const Scenario& sc, const EkfSlamConfig& config, const NavState& initial, std::mt19937_64& rng,
                      const FrameCallback& callback, bool keep_frames) {
   const Trajectory& traj = *sc.trajectory;
@@ -29,7 +64,7 @@ SimRun runSimulation(const Scenario& sc, const EkfSlamConfig& config, const NavS
   int next_frame = 1;  // the first frame comes one camera period after the start
   auto frameTime = [&](int k) { return initial.timestamp + k * cam_dt; };
   for (size_t k = 0; k < imu.samples.size(); ++k) {
-    filter.addImu(imu.samples[k]);
+    if (!activeFault(sc.faults, SensorFault::Kind::kImuGap, imu.samples[k].timestamp)) filter.addImu(imu.samples[k]);
     while (frameTime(next_frame) <= imu.samples[k].timestamp + 1e-12 && frameTime(next_frame) <= traj.endTime()) {
       const double t = frameTime(next_frame++);
       FrameRecord rec;
@@ -39,6 +74,11 @@ SimRun runSimulation(const Scenario& sc, const EkfSlamConfig& config, const NavS
       rec.true_accel_bias = imu.true_accel_bias[bias_index];
       rec.true_gyro_bias = imu.true_gyro_bias[bias_index];
       CameraFrame frame = camera.observe(rec.truth, &rng);
+      if (activeFault(sc.faults, SensorFault::Kind::kImageDropout, t)) continue;
+      if (activeFault(sc.faults, SensorFault::Kind::kCameraCovered, t)) frame.features.clear();
+      if (const SensorFault* f = activeFault(sc.faults, SensorFault::Kind::kOutlierBurst, t)) {
+        corruptFeatures(frame, f->outlier_fraction, rng);
+      }
       const auto tic = std::chrono::steady_clock::now();
       rec.result = filter.processFrame(frame);
       rec.filter_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - tic).count();

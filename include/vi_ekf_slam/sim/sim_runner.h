@@ -6,6 +6,7 @@
 #include <functional>
 #include <memory>
 #include <random>
+#include <string>
 #include <vector>
 
 #include "vi_ekf_slam/core/ekf_slam.h"
@@ -15,6 +16,22 @@
 #include "vi_ekf_slam/sim/trajectory.h"
 
 namespace vi_ekf_slam::sim {
+
+/// A sensor fault injected into a run during [start_s, start_s + duration_s] (absolute times).
+struct SensorFault {
+  enum class Kind {
+    kImageDropout,   ///< no image reaches the filter
+    kImuGap,         ///< no IMU sample reaches the filter
+    kOutlierBurst,   ///< `outlier_fraction` of the tracks jump 20-60 px (mistracked features)
+    kCameraCovered,  ///< images arrive without any feature
+  };
+  Kind kind = Kind::kImageDropout;
+  double start_s = 0.0;
+  double duration_s = 0.0;
+  double outlier_fraction = 0.3;
+  bool covers(double t) const { return t >= start_s && t < start_s + duration_s; }
+};
+std::string toString(SensorFault::Kind kind);
 
 struct Scenario {
   std::shared_ptr<const Trajectory> trajectory;
@@ -29,6 +46,8 @@ struct Scenario {
   /// Monte-Carlo runs start from the true state (zero biases, no drawn initial error; the
   /// filter's initial covariance is only its belief), as OpenVINS's simulator does.
   bool start_at_truth = false;
+  /// Faults injected while running (none by default).
+  std::vector<SensorFault> faults;
 };
 
 /// One camera time of a run.

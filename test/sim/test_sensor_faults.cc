@@ -1,0 +1,70 @@
+#include <gtest/gtest.h>
+
+#include "vi_ekf_slam/sim/hallway.h"
+#include "vi_ekf_slam/sim/scenarios.h"
+#include "vi_ekf_slam/sim/sim_runner.h"
+
+using namespace vi_ekf_slam;
+
+namespace {
+
+struct FaultRun {
+  double final_error = 0.0;
+  bool finite = true;
+  int frames = 0, imu_gaps = 0;
+  int frames_in_dropout = 0, covered_frames_with_updates = 0, burst_frames_with_rejections = 0;
+};
+
+FaultRun runWithFaults(const std::vector<sim::SensorFault>& faults) {
+  sim::Scenario sc = sim::hallwayScenario(sim::HallwayParams(), 1.0, 1);
+  sc.faults = faults;
+  EkfSlamConfig c;  // the node's defaults
+  c.imu_noise = sc.imu.noise;
+  std::mt19937_64 rng(3);
+  FaultRun r;
+  auto in = [&](sim::SensorFault::Kind kind, double t) {
+    for (const auto& f : faults)
+      if (f.kind == kind && f.covers(t)) return true;
+    return false;
+  };
+  sim::runSimulation(sc, c, sim::trueNavState(*sc.trajectory, sc.trajectory->startTime()), rng,
+                     [&](EkfSlam& f, sim::FrameRecord& rec) {
+                       ++r.frames;
+                       r.finite = r.finite && rec.estimate.p_n_b.allFinite() && rec.estimate.cov.allFinite();
+                       r.final_error = (rec.truth.p_n_b - rec.estimate.p_n_b).norm();
+                       r.imu_gaps = f.imuGaps();
+                       if (in(sim::SensorFault::Kind::kImageDropout, rec.t)) ++r.frames_in_dropout;
+                       if (in(sim::SensorFault::Kind::kCameraCovered, rec.t) && rec.result.update.accepted > 0)
+                         ++r.covered_frames_with_updates;
+                       if (in(sim::SensorFault::Kind::kOutlierBurst, rec.t) && !rec.result.update.rejected_ids.empty())
+                         ++r.burst_frames_with_rejections;
+                     });
+  return r;
+}
+
+}  // namespace
+
+// The four sensor faults the core can see, injected into the 35 s hallway walk (the fifth, a bag
+// restart, is a ROS clock jump: node_time_jump.test). Each fault must take effect (frames
+// missing, an IMU gap counted, no update while covered, outliers rejected by the gate) and the
+// filter must ride through them: finite throughout and a final error close to the fault-free
+// run's. Measured: fault-free 0.093 m, with the four faults 0.107 m (2.1 m before the IMU-gap
+// uncertainty stopped tying velocity to position).
+TEST(SensorFaults, FilterRidesThroughDropoutGapOutliersAndCoveredCamera) {
+  using K = sim::SensorFault::Kind;
+  const FaultRun clean = runWithFaults({});
+  const FaultRun hit = runWithFaults({{K::kImageDropout, 6.0, 2.0},
+                                      {K::kImuGap, 11.0, 0.5},
+                                      {K::kOutlierBurst, 15.0, 1.0},
+                                      {K::kCameraCovered, 27.0, 5.0}});
+  std::printf("final error: fault-free %.3f m, with faults %.3f m\n", clean.final_error, hit.final_error);
+  EXPECT_TRUE(clean.finite);
+  EXPECT_TRUE(hit.finite);
+  EXPECT_EQ(hit.frames_in_dropout, 0);
+  EXPECT_LT(hit.frames, clean.frames - 2 * 28 + 2);  // 2 s of images never arrived
+  EXPECT_GE(hit.imu_gaps, 1);
+  EXPECT_EQ(hit.covered_frames_with_updates, 0);
+  EXPECT_GE(hit.burst_frames_with_rejections, 20);  // nearly every one of the 28 burst frames
+  EXPECT_LT(hit.final_error, 0.3);
+  EXPECT_LT(hit.final_error, clean.final_error + 0.15);
+}
