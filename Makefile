@@ -102,10 +102,12 @@ screenshot: build $(BAG)
 demo: build $(BAG)
 	source $(DEVEL)/setup.bash && python3 tools/demo.py --bag $(BAG) --out results/demo --docs docs/img $(if $(filter 1,$(RVIZ)),--rviz)
 
-# The plots of the built-in walk and of the TUM corridor are copied to docs/img for the README.
+# The plots of the built-in walk and of the TUM corridor are copied to docs/img for the README,
+# only from the study itself (not from a preset, a recorded IMU or extra options).
+DOCS_STUDY = $(and $(filter builtin %tum_corridor1_512_16_okvis.txt,$(TRAJECTORY)),$(if $(PRESET)$(IMU)$(STUDY_ARGS),,yes))
 study: build
 	$(BIN)/vi_ekf_slam_study --trajectory $(TRAJECTORY) --runs $(RUNS) --seed $(SEED) --configs $(CONFIGS) --out $(OUT) $(if $(IMU),--imu $(IMU) --imu-noise $(IMU_NOISE)) $(if $(PRESET),--preset $(PRESET)) $(STUDY_ARGS)
-	python3 tools/plot_study.py $(OUT) $(if $(filter builtin %tum_corridor1_512_16_okvis.txt,$(TRAJECTORY)),--docs docs/img --prefix study_$(basename $(notdir $(TRAJECTORY))))
+	python3 tools/plot_study.py $(OUT) $(if $(DOCS_STUDY),--docs docs/img --prefix study_$(basename $(notdir $(TRAJECTORY))))
 
 # Benchmarks (numbers, not pass/fail), pinned to one core: core operations against the map size
 # with fitted growth exponents, the tracker on rendered and real frames, the offline pipeline's
