@@ -106,7 +106,7 @@ Options parse(int argc, char** argv) {
   }
   if (o.runs < 2) usage("--runs must be >= 2 (NEES bands need several runs)");
   if (o.threads < 1) usage("--threads must be >= 1");
-  if (o.max_landmarks < 0) usage("--max-landmarks must be >= 1");
+  if (o.max_landmarks < 0) usage("--max-landmarks must be >= 1 (0: the default)");
   if (o.start_offset < 0.0 || o.max_duration < 0.0) usage("--start-offset and --max-duration must be >= 0");
   if (o.start_offset > 0.0 && !o.imu.empty()) usage("--start-offset is for synthesized IMU only");
   if (o.imu_noise != "datasheet" && o.imu_noise != "euroc_mav") usage("--imu-noise must be datasheet or euroc_mav");

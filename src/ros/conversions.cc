@@ -120,7 +120,7 @@ nav_msgs::Odometry toOdometry(const NavState& nav, const Eigen::Vector3d& w_b, d
   const Mat3 R_b_n = nav.q_n_b.conjugate().toRotationMatrix();
   const Vec3 v_b = R_b_n * nav.v_n_b;
   tf2::toMsg(v_b, o.twist.twist.linear);
-  tf2::toMsg(Vec3(w_b), o.twist.twist.angular);
+  tf2::toMsg(w_b, o.twist.twist.angular);
   Eigen::Matrix<double, 6, 6> Tw = Eigen::Matrix<double, 6, 6>::Zero();
   // v_b = R^T v_n -> cov R^T P_v R (+ the attitude term, small at walking speed; omitted).
   Tw.topLeftCorner<3, 3>() = R_b_n * nav.cov.block<3, 3>(idx::kV, idx::kV) * R_b_n.transpose();

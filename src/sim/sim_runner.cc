@@ -29,14 +29,14 @@ std::string toString(SensorFault::Kind kind) {
   return "unknown";
 }
 
-namespace {
-
 const SensorFault* activeFault(const std::vector<SensorFault>& faults, SensorFault::Kind kind, double t) {
   for (const auto& f : faults) {
     if (f.kind == kind && f.covers(t)) return &f;
   }
   return nullptr;
 }
+
+namespace {
 
 /// Mistracks a fraction of the features: each chosen one jumps 20-60 px in a random direction.
 void corruptFeatures(CameraFrame& frame, double fraction, std::mt19937_64& rng) {

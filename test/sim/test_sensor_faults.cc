@@ -22,11 +22,7 @@ FaultRun runWithFaults(const std::vector<sim::SensorFault>& faults) {
   c.imu_noise = sc.imu.noise;
   std::mt19937_64 rng(3);
   FaultRun r;
-  auto in = [&](sim::SensorFault::Kind kind, double t) {
-    for (const auto& f : faults)
-      if (f.kind == kind && f.covers(t)) return true;
-    return false;
-  };
+  auto in = [&](sim::SensorFault::Kind kind, double t) { return sim::activeFault(faults, kind, t) != nullptr; };
   sim::runSimulation(sc, c, sim::trueNavState(*sc.trajectory, sc.trajectory->startTime()), rng,
                      [&](EkfSlam& f, sim::FrameRecord& rec) {
                        ++r.frames;
