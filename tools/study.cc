@@ -52,13 +52,16 @@ struct Options {
   std::string imu;          // recorded IMU (ASL imu0/data.csv) instead of a synthesized one
   std::string imu_noise = "datasheet";
   std::string preset;  // "" or openvins_sim
+  // "truth": every run starts at the true state (the preset's default, like OpenVINS);
+  // "prior": the start error is drawn from the filter's initial covariance (default otherwise).
+  std::string start;
 };
 
 [[noreturn]] void usage(const std::string& err) {
   std::cerr << "error: " << err << "\n"
             << "usage: vi_ekf_slam_study --trajectory builtin|FILE [--runs N] [--seed S] [--out DIR]\n"
                "       [--configs paper|all|NAME,...] [--threads N] [--density PER_M2] [--per-metre N]\n"
-               "       [--start-offset S] [--max-duration S] [--max-landmarks N]\n"
+               "       [--start-offset S] [--max-duration S] [--max-landmarks N] [--start truth|prior]\n"
                "       [--imu ASL_IMU_CSV] [--imu-noise datasheet|euroc_mav] [--preset openvins_sim]\n";
   std::exit(2);
 }
@@ -98,6 +101,8 @@ Options parse(int argc, char** argv) {
         o.imu_noise = v;
       else if (k == "--preset")
         o.preset = v;
+      else if (k == "--start")
+        o.start = v;
       else
         usage("unknown option " + k);
     } catch (const std::logic_error&) {
@@ -110,6 +115,7 @@ Options parse(int argc, char** argv) {
   if (o.start_offset < 0.0 || o.max_duration < 0.0) usage("--start-offset and --max-duration must be >= 0");
   if (o.start_offset > 0.0 && !o.imu.empty()) usage("--start-offset is for synthesized IMU only");
   if (o.imu_noise != "datasheet" && o.imu_noise != "euroc_mav") usage("--imu-noise must be datasheet or euroc_mav");
+  if (!o.start.empty() && o.start != "truth" && o.start != "prior") usage("--start must be truth or prior");
   if (!o.preset.empty() && o.preset != "openvins_sim") usage("unknown --preset '" + o.preset + "'");
   if (!o.preset.empty() && (o.trajectory == "builtin" || !o.imu.empty())) usage("--preset needs a TUM --trajectory");
   return o;
@@ -118,10 +124,11 @@ Options parse(int argc, char** argv) {
 /// The configurations of the study. The paper's three (fixed 8 m depth, composition when more
 /// than four landmarks were added at once), then beyond the paper: the same with anchored
 /// inverse-depth landmarks, and the composition after every update (robocentric) with each
-/// landmark initialization.
+/// landmark initialization; last, the node's default, which adds the zero-velocity update while
+/// standing (core/zero_velocity.h).
 std::vector<std::pair<std::string, EkfSlamConfig>> makeConfigs(const Options& o, const sim::Scenario& sc) {
   std::vector<std::pair<std::string, EkfSlamConfig>> all;
-  auto add = [&](Mechanization m, LandmarkInitMethod init, CompositionTrigger trig) {
+  auto add = [&](Mechanization m, LandmarkInitMethod init, CompositionTrigger trig, bool zero_velocity = false) {
     EkfSlamConfig c;
     c.mechanization = m;
     c.landmark_init = init;
@@ -133,11 +140,13 @@ std::vector<std::pair<std::string, EkfSlamConfig>> makeConfigs(const Options& o,
     // accuracy is the same as with 300 (README) at 60-80% of the time per frame.
     c.max_landmarks = o.max_landmarks > 0 ? o.max_landmarks : (o.preset.empty() ? 300 : 100);
     if (o.preset == "openvins_sim") c.initial = sim::openvinsSimInitialUncertainty();
+    c.zero_velocity.enabled = zero_velocity;
     std::string name = toString(m);
     if (init == LandmarkInitMethod::kInverseDepth) name += "+inverse_depth";
     if (m == Mechanization::kSensorCentricComposition && trig == CompositionTrigger::kEveryUpdate) {
       name += "+every_update";
     }
+    if (zero_velocity) name += "+zero_velocity";
     all.emplace_back(name, c);
   };
   const auto fixed = LandmarkInitMethod::kFixedDepth, inv = LandmarkInitMethod::kInverseDepth;
@@ -153,6 +162,8 @@ std::vector<std::pair<std::string, EkfSlamConfig>> makeConfigs(const Options& o,
   }
   add(Mechanization::kSensorCentricComposition, fixed, every);
   add(Mechanization::kSensorCentricComposition, inv, every);
+  // The node's default: the best one plus the zero-velocity update while standing.
+  add(Mechanization::kSensorCentricComposition, inv, every, true);
   if (o.configs == "all") return all;
   std::vector<std::pair<std::string, EkfSlamConfig>> chosen;
   std::stringstream ss(o.configs);
@@ -174,12 +185,15 @@ void writeConfigFiles(const fs::path& dir, const sim::ConsistencySummary& s, con
   fs::create_directories(dir);
   const eval::NeesBand b3 = eval::neesBand(3, s.runs);
   std::ofstream ts(dir / "timeseries.csv");
-  ts << "t,avg_nees_p,avg_nees_q,avg_nees_pose,median_gamma,rms_p,band6_lo,band6_hi,band3_lo,band3_hi\n"
+  ts << "t,avg_nees_p,avg_nees_q,avg_nees_pose,median_gamma,rms_p,band6_lo,band6_hi,band3_lo,band3_hi,"
+        "axis_p_x,axis_p_y,axis_p_z,axis_v_x,axis_v_y,axis_v_z,axis_q_x,axis_q_y,axis_q_z\n"
      << std::setprecision(15);
   for (size_t k = 0; k < s.t.size(); ++k) {
     ts << s.t[k] << "," << s.avg_nees_p[k] << "," << s.avg_nees_q[k] << "," << s.avg_nees_pose[k] << ","
        << s.median_gamma[k] << "," << s.rms_p[k] << "," << s.pose_band.lo << "," << s.pose_band.hi << "," << b3.lo
-       << "," << b3.hi << "\n";
+       << "," << b3.hi;
+    writeCsvRow(ts, {s.axis_p[k], s.axis_v[k], s.axis_q[k]});
+    ts << "\n";
   }
   std::ofstream r(dir / "run0.csv");
   r << "t,px,py,pz,ex,ey,ez,tx,ty,tz";
@@ -187,7 +201,8 @@ void writeConfigFiles(const fs::path& dir, const sim::ConsistencySummary& s, con
                         "e_q_sb", "s_q_sb", "e_p_ns", "s_p_ns", "e_q_ns", "s_q_ns"}) {
     r << "," << n << "_x," << n << "_y," << n << "_z";
   }
-  r << ",has_s,gamma,landmarks,new_landmarks,rejected,composed,nees_pose,update_ms\n" << std::setprecision(15);
+  r << ",has_s,gamma,landmarks,new_landmarks,rejected,composed,nees_pose,update_ms,stationary,parallax_px\n"
+    << std::setprecision(15);
   for (const auto& m : run0.frames) {
     r << m.t;
     writeCsvRow(r, {m.p_true, m.p_est, m.p_true});
@@ -198,7 +213,7 @@ void writeConfigFiles(const fs::path& dir, const sim::ConsistencySummary& s, con
     else
       writeCsvRow(r, {z, z, z, z, z, z, z, z});
     r << "," << m.has_s << "," << m.gamma << "," << m.landmarks << "," << m.new_landmarks << "," << m.rejected << ","
-      << m.composed << "," << m.nees_pose << "," << m.update_ms << "\n";
+      << m.composed << "," << m.nees_pose << "," << m.update_ms << "," << m.stationary << "," << m.parallax_px << "\n";
   }
   std::ofstream l(dir / "landmarks_run0.csv");
   l << "id,true_x,true_y,true_z,est_x,est_y,est_z\n" << std::setprecision(8);
@@ -241,6 +256,7 @@ int main(int argc, char** argv) {
     std::cerr << "error: " << e.what() << "\n";
     return 1;
   }
+  if (!o.start.empty()) sc.start_at_truth = o.start == "truth";
   if (o.max_duration > 0.0 || o.start_offset > 0.0) {
     const double start = sc.trajectory->startTime() + o.start_offset;
     const double end = o.max_duration > 0.0 ? start + o.max_duration : sc.trajectory->endTime();
@@ -288,10 +304,10 @@ int main(int argc, char** argv) {
   // summary.json: each configuration name -> metrics, plus the settings used.
   std::ofstream js(out / "summary.json");
   js << "{\n  \"config\": {\"trajectory\": \"" << traj_name << "\", \"seed\": " << o.seed << ", \"runs\": " << o.runs
-     << ", \"recorded_imu\": \"" << o.imu << "\", \"imu_noise\": \"" << o.imu_noise
-     << "\", \"duration_s\": " << jsonNumber(duration) << ", \"world_landmarks\": " << sc.world.size()
-     << ", \"imu_rate_hz\": " << sc.imu.rate_hz << ", \"camera_rate_hz\": " << sc.cam.rate_hz
-     << ", \"pixel_noise_px\": " << sc.cam.pixel_noise_px
+     << ", \"recorded_imu\": \"" << o.imu << "\", \"start\": \"" << (sc.start_at_truth ? "truth" : "prior")
+     << "\", \"imu_noise\": \"" << o.imu_noise << "\", \"duration_s\": " << jsonNumber(duration)
+     << ", \"world_landmarks\": " << sc.world.size() << ", \"imu_rate_hz\": " << sc.imu.rate_hz
+     << ", \"camera_rate_hz\": " << sc.cam.rate_hz << ", \"pixel_noise_px\": " << sc.cam.pixel_noise_px
      << ", \"accel_noise_density\": " << jsonNumber(sc.imu.noise.accel_noise_density)
      << ", \"gyro_noise_density\": " << jsonNumber(sc.imu.noise.gyro_noise_density)
      << ", \"accel_random_walk\": " << jsonNumber(sc.imu.noise.accel_random_walk)

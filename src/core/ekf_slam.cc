@@ -33,6 +33,8 @@ void EkfSlam::reset() {
   last_seen_.clear();
   compositions_ = 0;
   imu_gaps_ = 0;
+  zero_velocity_updates_ = 0;
+  stationary_.reset();
 }
 
 void EkfSlam::initialize(const NavState& init) {
@@ -59,7 +61,9 @@ void EkfSlam::initialize(const NavState& init) {
   if (isSensorCentric(config_.mechanization)) switchMechanization(s, config_.mechanization);
   state_ = std::move(s);
   last_seen_.clear();
+  stationary_.reset();
   compositions_ = 0;
+  zero_velocity_updates_ = 0;
   initialized_ = true;
   // Samples older than the start are of no use any more, except the one just before it.
   while (imu_.size() > 1 && imu_[1].timestamp <= init.timestamp) imu_.pop_front();
@@ -184,6 +188,12 @@ FrameResult EkfSlam::processFrame(const CameraFrame& frame) {
   if (!propagateTo(frame.timestamp)) {
     r.error = "IMU does not reach the frame time yet";
     return r;
+  }
+  if (config_.zero_velocity.enabled) {
+    const Mat3 R_n_c = (state_.x.q_n_s * state_.x.q_s_b).toRotationMatrix() * T_b_c_.R_b_c;
+    r.stationary = stationary_.update(frame, R_n_c, camera_, config_.zero_velocity);
+    if (r.stationary.stationary) r.zero_velocity_applied = zeroVelocityUpdate(state_, config_.zero_velocity).applied;
+    if (r.zero_velocity_applied) ++zero_velocity_updates_;
   }
   std::vector<FeatureObservation> known, fresh;
   for (const auto& f : frame.features) {

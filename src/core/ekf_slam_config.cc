@@ -73,6 +73,13 @@ std::string EkfSlamConfig::validate() const {
   requireNonNegative(err, "initial.yaw_rad [rad]", initial.yaw_rad);
   requirePositive(err, "initial.accel_bias_mps2 [m/s^2]", initial.accel_bias_mps2);
   requirePositive(err, "initial.gyro_bias_radps [rad/s]", initial.gyro_bias_radps);
+  requirePositive(err, "zero_velocity.window_s [s]", zero_velocity.window_s);
+  requirePositive(err, "zero_velocity.max_parallax_px [px]", zero_velocity.max_parallax_px);
+  if (zero_velocity.min_features < 3) err << "zero_velocity.min_features must be >= 3\n";
+  requirePositive(err, "zero_velocity.velocity_sigma_mps [m/s]", zero_velocity.velocity_sigma_mps);
+  if (!(zero_velocity.gate_probability > 0.0 && zero_velocity.gate_probability < 1.0)) {
+    err << "zero_velocity.gate_probability must be in (0, 1) (got " << zero_velocity.gate_probability << ")\n";
+  }
   return err.str();
 }
 

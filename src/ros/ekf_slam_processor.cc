@@ -341,6 +341,9 @@ void EkfSlamProcessor::output(const PendingImage& img, const CameraFrame& frame,
   s.accepted_observations = r.update.accepted;
   s.rejected_observations = static_cast<int>(r.update.rejected_ids.size());
   s.compositions = filter_->compositions();
+  s.stationary = r.zero_velocity_applied;
+  s.parallax_px = r.stationary.parallax_px;
+  s.zero_velocity_updates = filter_->zeroVelocityUpdates();
   s.resets = static_cast<int>(counters_.resets);
   s.update_time_ms = last_update_ms_;
   const Vec3 g_b = nav.q_n_b.conjugate() * gravityInNav(params_.filter.gravity_mps2);

@@ -181,6 +181,7 @@ void EkfSlamRos::diagnoseFilter(diagnostic_updater::DiagnosticStatusWrapper& sta
   stat.add("tracks", processor_->lastTracks());
   stat.add("rejected observations", processor_->counters().rejected_observations);
   stat.add("compositions", f ? f->compositions() : 0);
+  stat.add("zero-velocity updates (standing)", f ? f->zeroVelocityUpdates() : 0);
   stat.add("resets", processor_->counters().resets);
   stat.add("last update [ms]", processor_->lastUpdateMs());
 }

@@ -82,6 +82,10 @@ std::string fromReconfigure(const EkfSlamReconfigureConfig& c, NodeParams* p) {
   f.inverse_depth_sigma = c.inverse_depth_sigma;
   f.max_landmarks = c.max_landmarks;
   f.landmark_timeout_s = c.landmark_timeout_s;
+  f.zero_velocity.enabled = c.zero_velocity;
+  f.zero_velocity.window_s = c.zero_velocity_window_s;
+  f.zero_velocity.max_parallax_px = c.zero_velocity_max_parallax_px;
+  f.zero_velocity.velocity_sigma_mps = c.zero_velocity_sigma_mps;
   f.imu_noise.accel_noise_density = c.accel_noise_density;
   f.imu_noise.gyro_noise_density = c.gyro_noise_density;
   f.imu_noise.accel_random_walk = c.accel_random_walk;
@@ -190,6 +194,10 @@ EkfSlamReconfigureConfig toReconfigure(const NodeParams& p) {
   c.inverse_depth_sigma = f.inverse_depth_sigma;
   c.max_landmarks = f.max_landmarks;
   c.landmark_timeout_s = f.landmark_timeout_s;
+  c.zero_velocity = f.zero_velocity.enabled;
+  c.zero_velocity_window_s = f.zero_velocity.window_s;
+  c.zero_velocity_max_parallax_px = f.zero_velocity.max_parallax_px;
+  c.zero_velocity_sigma_mps = f.zero_velocity.velocity_sigma_mps;
   c.accel_noise_density = f.imu_noise.accel_noise_density;
   c.gyro_noise_density = f.imu_noise.gyro_noise_density;
   c.accel_random_walk = f.imu_noise.accel_random_walk;
@@ -232,6 +240,10 @@ std::string loadParams(const ParamSource& source, NodeParams* out) {
   rd("inverse_depth_sigma", c.inverse_depth_sigma);
   rd("max_landmarks", c.max_landmarks);
   rd("landmark_timeout_s", c.landmark_timeout_s);
+  rd("zero_velocity", c.zero_velocity);
+  rd("zero_velocity_window_s", c.zero_velocity_window_s);
+  rd("zero_velocity_max_parallax_px", c.zero_velocity_max_parallax_px);
+  rd("zero_velocity_sigma_mps", c.zero_velocity_sigma_mps);
   rd("accel_noise_density", c.accel_noise_density);
   rd("gyro_noise_density", c.gyro_noise_density);
   rd("accel_random_walk", c.accel_random_walk);
@@ -320,6 +332,9 @@ std::string describeParams(const NodeParams& p) {
     << "  max_landmarks=" << f.max_landmarks << " landmark_timeout_s=" << f.landmark_timeout_s
     << " [s] pixel_noise_px=" << f.update.pixel_noise_px << " [px] gate_probability=" << f.update.gate_probability
     << "\n"
+    << "  zero velocity: " << (f.zero_velocity.enabled ? "on" : "off") << ", window " << f.zero_velocity.window_s
+    << " [s], parallax < " << f.zero_velocity.max_parallax_px << " [px], sigma " << f.zero_velocity.velocity_sigma_mps
+    << " [m/s]\n"
     << "  imu noise: accel " << f.imu_noise.accel_noise_density << " [m/s^2/sqrt(Hz)], gyro "
     << f.imu_noise.gyro_noise_density << " [rad/s/sqrt(Hz)], accel walk " << f.imu_noise.accel_random_walk
     << " [m/s^3/sqrt(Hz)], gyro walk " << f.imu_noise.gyro_random_walk << " [rad/s^2/sqrt(Hz)]\n"

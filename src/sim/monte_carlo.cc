@@ -116,6 +116,8 @@ RunResult runMonteCarloRun(const Scenario& scenario_in, const EkfSlamConfig& con
     m.new_landmarks = static_cast<int>(rec.result.new_ids.size());
     m.rejected = static_cast<int>(rec.result.update.rejected_ids.size());
     m.composed = rec.result.composed;
+    m.stationary = rec.result.zero_velocity_applied;
+    m.parallax_px = rec.result.stationary.parallax_px;
     p_true.push_back(m.p_true);
     p_est.push_back(m.p_est);
     q_err_deg.push_back(m.e_q.norm() * 180.0 / M_PI);
@@ -155,6 +157,7 @@ ConsistencySummary summarize(const std::string& name, const std::vector<RunResul
   std::vector<double> times;
   for (size_t k = 0; k < T; ++k) {
     double np = 0, nq = 0, npose = 0, e2 = 0;
+    Vec3 ap = Vec3::Zero(), av = Vec3::Zero(), aq = Vec3::Zero();
     std::vector<double> g;
     for (const auto& r : runs) {
       const FrameMetrics& f = r.frames[k];
@@ -162,6 +165,9 @@ ConsistencySummary summarize(const std::string& name, const std::vector<RunResul
       nq += f.nees_q / M;
       npose += f.nees_pose / M;
       e2 += f.e_p.squaredNorm() / M;
+      ap += f.e_p.cwiseQuotient(f.s_p).cwiseAbs2() / M;
+      av += f.e_v.cwiseQuotient(f.s_v).cwiseAbs2() / M;
+      aq += f.e_q.cwiseQuotient(f.s_q).cwiseAbs2() / M;
       if (std::isfinite(f.gamma)) g.push_back(f.gamma);
       times.push_back(f.update_ms);
     }
@@ -172,6 +178,9 @@ ConsistencySummary summarize(const std::string& name, const std::vector<RunResul
     std::sort(g.begin(), g.end());
     s.median_gamma.push_back(g.empty() ? std::nan("") : g[g.size() / 2]);
     s.rms_p.push_back(std::sqrt(e2));
+    s.axis_p.push_back(ap);
+    s.axis_v.push_back(av);
+    s.axis_q.push_back(aq);
     if (std::isfinite(npose)) {
       ++counted;
       if (s.pose_band.contains(npose)) ++inside;

@@ -1,5 +1,7 @@
 #include <gtest/gtest.h>
 
+#include <fstream>
+
 #include "test_helpers.h"
 #include "vi_ekf_slam/sim/monte_carlo.h"
 #include "vi_ekf_slam/sim/scenarios.h"
@@ -64,4 +66,125 @@ TEST(MonteCarlo, BestConfigurationIsConsistentOnAShortWalk) {
   EXPECT_LT(paper_wc.consistent_fraction, 0.3);
   std::printf("paper world-centric: NEES pose %.1f, consistent %.2f\n", paper_wc.nees_pose,
               paper_wc.consistent_fraction);
+}
+
+namespace {
+struct StandingStartResult {
+  double velocity_nees = 0.0;  ///< run- and time-averaged NEES of the velocity while standing (3 dof)
+  double pose_nees = 0.0;      ///< run- and time-averaged pose NEES over the whole run
+  double standing_detected = 0.0;
+  int walking_detected = 0;  ///< frames detected as standing while walking (false alarms)
+  double ate_m = 0.0;
+};
+
+/// The walk after 4 s of standing still, with or without the zero-velocity update.
+StandingStartResult standingStart(bool zero_velocity, int runs) {
+  sim::HallwayParams hp;
+  hp.standing_s = 4.0;
+  hp.duration_s = 14.0;
+  hp.turn_time_s = 10.0;
+  const sim::Scenario sc = sim::hallwayScenario(hp, 1.0, 9);
+  EkfSlamConfig c;
+  c.imu_noise = sc.imu.noise;
+  c.landmark_timeout_s = 1.0;
+  c.zero_velocity.enabled = zero_velocity;
+  StandingStartResult out;
+  int standing_frames = 0, frames = 0;
+  double v_nees = 0.0;
+  for (int r = 0; r < runs; ++r) {
+    const sim::RunResult run = sim::runMonteCarloRun(sc, c, 700 + r);
+    for (const auto& f : run.frames) {
+      out.pose_nees += f.nees_pose;
+      ++frames;
+      if (f.t < hp.standing_s) {
+        v_nees += f.e_v.cwiseQuotient(f.s_v).squaredNorm();
+        ++standing_frames;
+        out.standing_detected += f.stationary;
+      } else if (f.t > hp.standing_s + 0.6 && f.stationary) {  // after the parallax window
+        ++out.walking_detected;
+      }
+    }
+    out.ate_m += run.ate_position_m / runs;
+  }
+  out.velocity_nees = v_nees / standing_frames;
+  out.pose_nees /= frames;
+  out.standing_detected /= standing_frames;
+  return out;
+}
+}  // namespace
+
+// Standing still, the camera constrains only inverse depth times velocity; the zero-velocity
+// update (core/zero_velocity.h) detects the missing parallax and pins the velocity. Measured
+// (10 runs): see the printout; the detector fires on most standing frames and never while walking.
+TEST(MonteCarlo, ZeroVelocityUpdateWhileStandingKeepsTheStartConsistent) {
+  const int runs = 10;
+  const StandingStartResult on = standingStart(true, runs), off = standingStart(false, runs);
+  std::printf(
+      "standing start: velocity NEES %.2f (off %.2f), pose NEES %.2f (off %.2f), ATE %.3f (off %.3f) m, "
+      "standing detected %.2f, false alarms %d\n",
+      on.velocity_nees, off.velocity_nees, on.pose_nees, off.pose_nees, on.ate_m, off.ate_m, on.standing_detected,
+      on.walking_detected);
+  EXPECT_GT(on.standing_detected, 0.6);
+  EXPECT_EQ(on.walking_detected, 0);
+  EXPECT_EQ(off.standing_detected, 0.0);
+  // A still rig is consistent either way; the update must not break it.
+  EXPECT_GT(on.velocity_nees, 1.5);
+  EXPECT_LT(on.velocity_nees, 4.5);
+  EXPECT_GT(on.pose_nees, 3.0);
+  EXPECT_LT(on.pose_nees, 9.0);
+  EXPECT_LT(on.ate_m, 1.1 * off.ate_m);
+}
+
+// The TUM-VI corridor starts with 5.5 s of a hand-held rig held still (jitter of up to 0.16 m/s).
+// Without the zero-velocity update the camera's product of inverse depth and velocity lets the
+// position drift away while standing, with a confident covariance; with it the position stays.
+// The velocity itself is not made consistent by the update (the jitter is not white noise around
+// zero); what the start leaves in the pose is smaller. Measured (10 runs, 20 s): pose NEES over
+// 10-20 s 7.30 with the update vs 8.72 without, mean position error 0.103 vs 0.112 m; the
+// velocity NEES while standing stays ~15 either way.
+TEST(MonteCarlo, ZeroVelocityUpdateKeepsTheHandHeldStartOfTheTumCorridorInPlace) {
+  const char* dir = std::getenv("DATA_DIR");
+  if (!dir) GTEST_SKIP() << "DATA_DIR not set";
+  const std::string path = std::string(dir) + "/trajectories/tum_corridor1_512_16_okvis.txt";
+  if (!std::ifstream(path)) GTEST_SKIP() << path << " not found";
+  sim::Scenario sc = sim::tumScenario(path, 15.0, 1);
+  const double t0 = sc.trajectory->startTime();
+  sc.trajectory = std::make_shared<sim::TruncatedTrajectory>(sc.trajectory, t0, t0 + 20.0);
+  struct Stats {
+    double pose_nees = 0.0, pos_err = 0.0, vel_nees = 0.0, detected = 0.0;
+  };
+  auto run = [&](bool zero_velocity) {
+    EkfSlamConfig c;
+    c.imu_noise = sc.imu.noise;
+    c.landmark_timeout_s = 1.0;
+    c.zero_velocity.enabled = zero_velocity;
+    Stats s;
+    int n = 0, standing = 0;
+    for (int r = 0; r < 10; ++r) {
+      for (const auto& f : sim::runMonteCarloRun(sc, c, 1000003ULL + r).frames) {
+        if (f.t - t0 > 1.0 && f.t - t0 < 5.5) {  // standing, after the parallax window
+          s.detected += f.stationary;
+          s.vel_nees += f.e_v.cwiseQuotient(f.s_v).squaredNorm();
+          ++standing;
+        }
+        if (f.t - t0 < 10.0) continue;  // walking: what the start left behind
+        s.pose_nees += f.nees_pose;
+        s.pos_err += f.e_p.norm();
+        ++n;
+      }
+    }
+    s.pose_nees /= n;
+    s.pos_err /= n;
+    s.vel_nees /= standing;
+    s.detected /= standing;
+    return s;
+  };
+  const Stats on = run(true), off = run(false);
+  std::printf(
+      "corridor, 10-20 s: pose NEES %.2f (off %.2f), mean position error %.3f (off %.3f) m; "
+      "standing: velocity NEES %.2f (off %.2f), detected on %.2f of the frames\n",
+      on.pose_nees, off.pose_nees, on.pos_err, off.pos_err, on.vel_nees, off.vel_nees, on.detected);
+  EXPECT_GT(on.detected, 0.5);
+  EXPECT_LT(on.pose_nees, off.pose_nees);
+  EXPECT_LT(on.pos_err, off.pos_err);
 }

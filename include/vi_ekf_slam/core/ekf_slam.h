@@ -22,6 +22,8 @@ struct FrameResult {
   std::vector<std::int64_t> new_ids;
   std::vector<std::int64_t> removed_ids;
   bool composed = false;
+  StationaryDetector::Decision stationary;  ///< the standing test of this frame
+  bool zero_velocity_applied = false;       ///< stationary and the zero-velocity update passed its gate
 };
 
 class EkfSlam {
@@ -69,6 +71,8 @@ class EkfSlam {
 
   int compositions() const { return compositions_; }
   int imuGaps() const { return imu_gaps_; }
+  /// Zero-velocity updates applied since the start or the last reset (standing detected).
+  int zeroVelocityUpdates() const { return zero_velocity_updates_; }
 
  private:
   void removeLandmarksById(const std::vector<std::int64_t>& ids);
@@ -86,6 +90,8 @@ class EkfSlam {
   std::unordered_map<std::int64_t, double> last_seen_;
   int compositions_ = 0;
   int imu_gaps_ = 0;
+  int zero_velocity_updates_ = 0;
+  StationaryDetector stationary_;
 };
 
 }  // namespace vi_ekf_slam

@@ -8,6 +8,7 @@
 #include "vi_ekf_slam/core/imu_propagation.h"
 #include "vi_ekf_slam/core/landmark_initialization.h"
 #include "vi_ekf_slam/core/state_layout.h"
+#include "vi_ekf_slam/core/zero_velocity.h"
 
 namespace vi_ekf_slam {
 
@@ -61,7 +62,8 @@ struct EkfSlamConfig {
   /// unknown acceleration and angular rate with these std-devs (a walking torso: ~3 m/s^2, 0.3 rad/s).
   double imu_gap_accel_sigma_mps2 = 3.0;
   double imu_gap_gyro_sigma_radps = 0.3;
-  int imu_buffer_max = 4000;  ///< bound on buffered IMU samples
+  int imu_buffer_max = 4000;         ///< bound on buffered IMU samples
+  ZeroVelocityParams zero_velocity;  ///< standing detection from parallax + zero-velocity update
   InitialUncertainty initial;
 
   /// Empty if every value is possible, otherwise one line per problem.

@@ -31,7 +31,9 @@ struct FrameMetrics {
   int new_landmarks = 0;
   int rejected = 0;
   bool composed = false;
-  double update_ms = 0.0;  ///< filter time for this frame (propagation + update + init + composition)
+  bool stationary = false;   ///< the filter detected standing (zero-velocity update applied)
+  double parallax_px = 0.0;  ///< the standing test's median de-rotated parallax
+  double update_ms = 0.0;    ///< filter time for this frame (propagation + update + init + composition)
 };
 
 struct RunResult {
@@ -74,6 +76,9 @@ struct ConsistencySummary {
   // Run-averaged time series (same length as the runs' frames); gamma as the run median, since
   // the landmarks initialized in a frame make single runs spike (as the paper notes).
   std::vector<double> t, avg_nees_p, avg_nees_q, avg_nees_pose, median_gamma, rms_p;
+  /// Per axis, run-averaged (e_i / sigma_i)^2 of position, velocity and orientation in {n}: 1 when
+  /// that axis is consistent; shows which direction an inconsistency lives in.
+  std::vector<Vec3> axis_p, axis_v, axis_q;
 };
 
 ConsistencySummary summarize(const std::string& name, const std::vector<RunResult>& runs);

@@ -1,0 +1,106 @@
+#include <gtest/gtest.h>
+
+#include "test_helpers.h"
+#include "vi_ekf_slam/core/zero_velocity.h"
+
+using namespace vi_ekf_slam;
+
+TEST(ZeroVelocity, UpdateEqualsTextbookJosephForm) {
+  std::mt19937_64 rng(4);
+  for (Mechanization m : {Mechanization::kWorldCentric, Mechanization::kSensorCentricComposition}) {
+    FilterState s = test::randomState(m, 4, rng);
+    s.x.v_s_b = Vec3(0.03, -0.02, 0.01);  // near zero: passes the gate
+    const FilterState before = s;
+    const Eigen::MatrixXd P = s.covariance();
+    ZeroVelocityParams params;
+    params.velocity_sigma_mps = 0.05;
+    const ZeroVelocityResult r = zeroVelocityUpdate(s, params);
+    ASSERT_TRUE(r.applied);
+    Eigen::MatrixXd H = Eigen::MatrixXd::Zero(3, s.dim());
+    H.middleCols<3>(idx::kV).setIdentity();
+    const Mat3 R = 0.05 * 0.05 * Mat3::Identity();
+    const Mat3 S = H * P * H.transpose() + R;
+    const Eigen::MatrixXd K = P * H.transpose() * S.inverse();
+    const Eigen::MatrixXd IKH = Eigen::MatrixXd::Identity(s.dim(), s.dim()) - K * H;
+    const Eigen::MatrixXd P_joseph = IKH * P * IKH.transpose() + K * R * K.transpose();
+    EXPECT_LT((s.covariance() - P_joseph).cwiseAbs().maxCoeff(), 1e-12);
+    const Vec3 r_v = -before.x.v_s_b;
+    EXPECT_NEAR(r.nis, r_v.dot(S.inverse() * r_v), 1e-9);
+    const Eigen::VectorXd dx = s.boxminus(before);
+    EXPECT_LT((dx - K * r_v).cwiseAbs().maxCoeff(), 1e-12);
+    // The velocity moved towards zero and its uncertainty is below the pseudo-measurement's.
+    EXPECT_LT(s.x.v_s_b.norm(), before.x.v_s_b.norm());
+    EXPECT_LT((s.covariance().block<3, 3>(idx::kV, idx::kV).trace()), 3 * 0.05 * 0.05);
+  }
+}
+
+TEST(ZeroVelocity, GateRefusesAMovingFilter) {
+  std::mt19937_64 rng(5);
+  FilterState s = test::randomState(Mechanization::kSensorCentric, 2, rng);
+  s.x.v_s_b = Vec3(1.3, 0.0, 0.0);  // walking, far outside sqrt(P_vv + R)
+  const FilterState before = s;
+  EXPECT_FALSE(zeroVelocityUpdate(s, ZeroVelocityParams()).applied);
+  EXPECT_EQ(s.x.v_s_b, before.x.v_s_b);
+  EXPECT_EQ(s.covariance(), before.covariance());
+}
+
+namespace {
+/// Features of a world of points seen from camera pose (R_n_c, p_n_c), 0.5 px noise.
+CameraFrame see(double t, const std::vector<Vec3>& world, const Mat3& R_n_c, const Vec3& p_n_c, const CameraModel& cam,
+                std::mt19937_64& rng) {
+  std::normal_distribution<double> n(0.0, 0.5);
+  CameraFrame f;
+  f.timestamp = t;
+  for (size_t i = 0; i < world.size(); ++i) {
+    const Vec3 p_c = R_n_c.transpose() * (world[i] - p_n_c);
+    Eigen::Vector2d uv;
+    if (p_c.z() > 0.5 && cam.project(p_c, &uv) && cam.inImage(uv)) {
+      f.features.push_back({static_cast<std::int64_t>(i), uv + Eigen::Vector2d(n(rng), n(rng))});
+    }
+  }
+  return f;
+}
+}  // namespace
+
+TEST(ZeroVelocity, DetectorTellsStandingAndTurningFromWalking) {
+  std::mt19937_64 rng(6);
+  const CameraModel cam = test::paperCamera();
+  std::vector<Vec3> world;  // camera looks along z; points 2-12 m ahead
+  std::uniform_real_distribution<double> lat(-4.0, 4.0), depth(2.0, 12.0);
+  for (int i = 0; i < 200; ++i) world.emplace_back(lat(rng), 0.5 * lat(rng), depth(rng));
+  const ZeroVelocityParams params;
+  // motion(t) -> camera pose; 28 Hz for 2 s; the decision at the end.
+  auto decide = [&](const std::function<std::pair<Mat3, Vec3>(double)>& motion) {
+    StationaryDetector det;
+    StationaryDetector::Decision d;
+    for (int k = 0; k <= 56; ++k) {
+      const double t = k / 28.0;
+      const auto [R, p] = motion(t);
+      d = det.update(see(t, world, R, p, cam, rng), R, cam, params);
+    }
+    return d;
+  };
+  const auto standing = decide([](double) { return std::make_pair(Mat3::Identity(), Vec3::Zero()); });
+  EXPECT_TRUE(standing.decided);
+  EXPECT_TRUE(standing.stationary) << standing.parallax_px;
+  // Turning on the spot at 30 deg/s: the filter's rotation removes it.
+  const auto turning = decide([](double t) { return std::make_pair(expSO3(Vec3(0, 0.52 * t, 0)), Vec3::Zero()); });
+  EXPECT_TRUE(turning.stationary) << turning.parallax_px;
+  // Swaying 1 cm at 2 Hz while standing is still standing.
+  const auto swaying =
+      decide([](double t) { return std::make_pair(Mat3::Identity(), Vec3(0.01 * std::sin(4 * M_PI * t), 0, 0)); });
+  EXPECT_TRUE(swaying.stationary) << swaying.parallax_px;
+  // Walking forward at 1.3 m/s and sideways at 0.3 m/s: not standing.
+  const auto walking = decide([](double t) { return std::make_pair(Mat3::Identity(), Vec3(0, 0, 1.3 * t)); });
+  EXPECT_TRUE(walking.decided);
+  EXPECT_FALSE(walking.stationary) << walking.parallax_px;
+  const auto sidestep = decide([](double t) { return std::make_pair(Mat3::Identity(), Vec3(0.3 * t, 0, 0)); });
+  EXPECT_FALSE(sidestep.stationary) << sidestep.parallax_px;
+  // Too few features: no decision.
+  StationaryDetector det;
+  CameraFrame empty;
+  for (int k = 0; k <= 28; ++k) {
+    empty.timestamp = k / 28.0;
+    EXPECT_FALSE(det.update(empty, Mat3::Identity(), cam, params).decided);
+  }
+}
