@@ -10,17 +10,24 @@ using namespace vi_ekf_slam;
 
 namespace {
 
+/// The filter told the simulator's noise; landmarks out of view for 1 s leave the map (the study's).
+EkfSlamConfig simConfig(const sim::Scenario& sc, bool zero_velocity = true) {
+  EkfSlamConfig c;
+  c.imu_noise = sc.imu.noise;
+  c.landmark_timeout_s = 1.0;
+  c.zero_velocity.enabled = zero_velocity;
+  return c;
+}
+
 sim::ConsistencySummary shortStudy(Mechanization m, LandmarkInitMethod init, CompositionTrigger trig, int runs) {
   sim::HallwayParams hp;
   hp.duration_s = 12.0;
   hp.turn_time_s = 8.0;  // the turn happens inside the short walk
   const sim::Scenario sc = sim::hallwayScenario(hp, 1.0, 9);
-  EkfSlamConfig c;
+  EkfSlamConfig c = simConfig(sc);
   c.mechanization = m;
   c.landmark_init = init;
   c.composition_trigger = trig;
-  c.imu_noise = sc.imu.noise;
-  c.landmark_timeout_s = 1.0;
   std::vector<sim::RunResult> results;
   for (int r = 0; r < runs; ++r) results.push_back(sim::runMonteCarloRun(sc, c, 500 + r));
   return sim::summarize(toString(m), results);
@@ -84,10 +91,7 @@ StandingStartResult standingStart(bool zero_velocity, int runs) {
   hp.duration_s = 14.0;
   hp.turn_time_s = 10.0;
   const sim::Scenario sc = sim::hallwayScenario(hp, 1.0, 9);
-  EkfSlamConfig c;
-  c.imu_noise = sc.imu.noise;
-  c.landmark_timeout_s = 1.0;
-  c.zero_velocity.enabled = zero_velocity;
+  const EkfSlamConfig c = simConfig(sc, zero_velocity);
   StandingStartResult out;
   int standing_frames = 0, frames = 0;
   double v_nees = 0.0;
@@ -154,10 +158,7 @@ TEST(MonteCarlo, ZeroVelocityUpdateKeepsTheHandHeldStartOfTheTumCorridorInPlace)
     double pose_nees = 0.0, pos_err = 0.0, vel_nees = 0.0, detected = 0.0;
   };
   auto run = [&](bool zero_velocity) {
-    EkfSlamConfig c;
-    c.imu_noise = sc.imu.noise;
-    c.landmark_timeout_s = 1.0;
-    c.zero_velocity.enabled = zero_velocity;
+    const EkfSlamConfig c = simConfig(sc, zero_velocity);
     Stats s;
     int n = 0, standing = 0;
     for (int r = 0; r < 10; ++r) {
