@@ -1,7 +1,8 @@
 // Real feature tracks + real IMU (EuRoC V1_01, first 30 s, EqVIO front end) through the core for
 // every mechanization and landmark initialization; ATE and final error against the ground truth.
 //
-//   vi_ekf_slam_run_features [--data DATA_DIR] [--out DIR]
+//   vi_ekf_slam_run_features [--data DATA_DIR] [--out DIR] [--gate P (chi^2 gate probability)]
+#include <cstdlib>
 #include <cstdio>
 #include <iostream>
 
@@ -26,12 +27,15 @@ EkfSlamConfig euroFeatureConfig() {
 int main(int argc, char** argv) {
   std::string data_dir = std::getenv("DATA_DIR") ? std::getenv("DATA_DIR") : "../shared/data";
   std::string out = "results/run_features";
+  double gate = 0.0;  // 0: the core default
   for (int i = 1; i + 1 < argc; i += 2) {
     const std::string k = argv[i];
     if (k == "--data")
       data_dir = argv[i + 1];
     else if (k == "--out")
       out = argv[i + 1];
+    else if (k == "--gate")
+      gate = std::atof(argv[i + 1]);
   }
   eval::FeatureTrackData data;
   std::vector<eval::StampedPose> truth;
@@ -51,6 +55,7 @@ int main(int argc, char** argv) {
       EkfSlamConfig c = euroFeatureConfig();
       c.mechanization = m;
       c.landmark_init = init;
+      if (gate > 0.0 && gate < 1.0) c.update.gate_probability = gate;
       c.composition_trigger = init == LandmarkInitMethod::kFixedDepth ? CompositionTrigger::kNewLandmarks
                                                                       : CompositionTrigger::kEveryUpdate;
       StaticInitParams s;

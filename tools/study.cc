@@ -55,6 +55,7 @@ struct Options {
   // "truth": every run starts at the true state (the preset's default, like OpenVINS);
   // "prior": the start error is drawn from the filter's initial covariance (default otherwise).
   std::string start;
+  double gate = 0.0;  // chi^2 gate probability of every configuration; 0: the core's default
 };
 
 [[noreturn]] void usage(const std::string& err) {
@@ -62,7 +63,8 @@ struct Options {
             << "usage: vi_ekf_slam_study --trajectory builtin|FILE [--runs N] [--seed S] [--out DIR]\n"
                "       [--configs paper|all|NAME,...] [--threads N] [--density PER_M2] [--per-metre N]\n"
                "       [--start-offset S] [--max-duration S] [--max-landmarks N] [--start truth|prior]\n"
-               "       [--imu ASL_IMU_CSV] [--imu-noise datasheet|euroc_mav] [--preset openvins_sim]\n";
+               "       [--imu ASL_IMU_CSV] [--imu-noise datasheet|euroc_mav] [--preset openvins_sim]\n"
+               "       [--gate P] (chi^2 gate probability of every configuration)\n";
   std::exit(2);
 }
 
@@ -103,6 +105,8 @@ Options parse(int argc, char** argv) {
         o.preset = v;
       else if (k == "--start")
         o.start = v;
+      else if (k == "--gate")
+        o.gate = std::stod(v);
       else
         usage("unknown option " + k);
     } catch (const std::logic_error&) {
@@ -115,6 +119,7 @@ Options parse(int argc, char** argv) {
   if (o.start_offset < 0.0 || o.max_duration < 0.0) usage("--start-offset and --max-duration must be >= 0");
   if (o.start_offset > 0.0 && !o.imu.empty()) usage("--start-offset is for synthesized IMU only");
   if (o.imu_noise != "datasheet" && o.imu_noise != "euroc_mav") usage("--imu-noise must be datasheet or euroc_mav");
+  if (o.gate != 0.0 && !(o.gate > 0.0 && o.gate < 1.0)) usage("--gate must be in (0, 1)");
   if (!o.start.empty() && o.start != "truth" && o.start != "prior") usage("--start must be truth or prior");
   if (!o.preset.empty() && o.preset != "openvins_sim") usage("unknown --preset '" + o.preset + "'");
   if (!o.preset.empty() && (o.trajectory == "builtin" || !o.imu.empty())) usage("--preset needs a TUM --trajectory");
@@ -141,6 +146,7 @@ std::vector<std::pair<std::string, EkfSlamConfig>> makeConfigs(const Options& o,
     c.max_landmarks = o.max_landmarks > 0 ? o.max_landmarks : (o.preset.empty() ? 300 : 100);
     if (o.preset == "openvins_sim") c.initial = sim::openvinsSimInitialUncertainty();
     c.zero_velocity.enabled = zero_velocity;
+    if (o.gate > 0.0) c.update.gate_probability = o.gate;
     std::string name = toString(m);
     if (init == LandmarkInitMethod::kInverseDepth) name += "+inverse_depth";
     if (m == Mechanization::kSensorCentricComposition && trig == CompositionTrigger::kEveryUpdate) {
