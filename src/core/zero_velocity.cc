@@ -4,7 +4,6 @@
 #include <algorithm>
 
 #include "vi_ekf_slam/core/chi_squared.h"
-#include "vi_ekf_slam/core/matrix_utils.h"
 
 namespace vi_ekf_slam {
 
