@@ -36,6 +36,18 @@ int main(int argc, char** argv) {
       out = argv[i + 1];
     else if (k == "--gate")
       gate = std::atof(argv[i + 1]);
+    else {
+      std::cerr << "error: unknown option " << k << "\n";
+      return 2;
+    }
+  }
+  if (argc % 2 == 0) {
+    std::cerr << "error: missing value for " << argv[argc - 1] << "\n";
+    return 2;
+  }
+  if (gate != 0.0 && !(gate > 0.0 && gate < 1.0)) {
+    std::cerr << "error: --gate must be in (0, 1) (got " << gate << ")\n";
+    return 2;
   }
   eval::FeatureTrackData data;
   std::vector<eval::StampedPose> truth;
@@ -55,7 +67,7 @@ int main(int argc, char** argv) {
       EkfSlamConfig c = euroFeatureConfig();
       c.mechanization = m;
       c.landmark_init = init;
-      if (gate > 0.0 && gate < 1.0) c.update.gate_probability = gate;
+      if (gate > 0.0) c.update.gate_probability = gate;
       c.composition_trigger = init == LandmarkInitMethod::kFixedDepth ? CompositionTrigger::kNewLandmarks
                                                                       : CompositionTrigger::kEveryUpdate;
       StaticInitParams s;

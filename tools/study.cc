@@ -56,6 +56,9 @@ struct Options {
   // "prior": the start error is drawn from the filter's initial covariance (default otherwise).
   std::string start;
   double gate = 0.0;  // chi^2 gate probability of every configuration; 0: the core's default
+  // +zero_velocity: "wait" (the core's default): new landmarks wait until the standing detector
+  // sees the rig move, unless the IMU shows rest; "immediate": whenever a track is new.
+  std::string new_landmarks = "wait";
 };
 
 [[noreturn]] void usage(const std::string& err) {
@@ -64,7 +67,8 @@ struct Options {
                "       [--configs paper|all|NAME,...] [--threads N] [--density PER_M2] [--per-metre N]\n"
                "       [--start-offset S] [--max-duration S] [--max-landmarks N] [--start truth|prior]\n"
                "       [--imu ASL_IMU_CSV] [--imu-noise datasheet|euroc_mav] [--preset openvins_sim]\n"
-               "       [--gate P] (chi^2 gate probability of every configuration)\n";
+               "       [--gate P] (chi^2 gate probability of every configuration)\n"
+               "       [--new-landmarks wait|immediate] (+zero_velocity: while the rig is not seen moving)\n";
   std::exit(2);
 }
 
@@ -107,6 +111,8 @@ Options parse(int argc, char** argv) {
         o.start = v;
       else if (k == "--gate")
         o.gate = std::stod(v);
+      else if (k == "--new-landmarks")
+        o.new_landmarks = v;
       else
         usage("unknown option " + k);
     } catch (const std::logic_error&) {
@@ -121,9 +127,19 @@ Options parse(int argc, char** argv) {
   if (o.imu_noise != "datasheet" && o.imu_noise != "euroc_mav") usage("--imu-noise must be datasheet or euroc_mav");
   if (o.gate != 0.0 && !(o.gate > 0.0 && o.gate < 1.0)) usage("--gate must be in (0, 1)");
   if (!o.start.empty() && o.start != "truth" && o.start != "prior") usage("--start must be truth or prior");
+  if (o.new_landmarks != "wait" && o.new_landmarks != "immediate") usage("--new-landmarks must be wait or immediate");
   if (!o.preset.empty() && o.preset != "openvins_sim") usage("unknown --preset '" + o.preset + "'");
   if (!o.preset.empty() && (o.trajectory == "builtin" || !o.imu.empty())) usage("--preset needs a TUM --trajectory");
   return o;
+}
+
+/// The chi^2 gate probability that keeps all but 0.01% of correct observations.
+constexpr double kOutlierFreeGate = 0.9999;
+
+std::string formatGate(double p) {
+  std::ostringstream s;
+  s << p;
+  return s.str();
 }
 
 /// The configurations of the study. The paper's three (fixed 8 m depth, composition when more
@@ -133,7 +149,8 @@ Options parse(int argc, char** argv) {
 /// standing (core/zero_velocity.h).
 std::vector<std::pair<std::string, EkfSlamConfig>> makeConfigs(const Options& o, const sim::Scenario& sc) {
   std::vector<std::pair<std::string, EkfSlamConfig>> all;
-  auto add = [&](Mechanization m, LandmarkInitMethod init, CompositionTrigger trig, bool zero_velocity = false) {
+  auto add = [&](Mechanization m, LandmarkInitMethod init, CompositionTrigger trig, bool zero_velocity = false,
+                 double gate = 0.0) {
     EkfSlamConfig c;
     c.mechanization = m;
     c.landmark_init = init;
@@ -146,13 +163,18 @@ std::vector<std::pair<std::string, EkfSlamConfig>> makeConfigs(const Options& o,
     c.max_landmarks = o.max_landmarks > 0 ? o.max_landmarks : (o.preset.empty() ? 300 : 100);
     if (o.preset == "openvins_sim") c.initial = sim::openvinsSimInitialUncertainty();
     c.zero_velocity.enabled = zero_velocity;
-    if (o.gate > 0.0) c.update.gate_probability = o.gate;
+    c.zero_velocity.defer_landmarks = o.new_landmarks == "wait";
+    if (gate > 0.0)
+      c.update.gate_probability = gate;
+    else if (o.gate > 0.0)
+      c.update.gate_probability = o.gate;
     std::string name = toString(m);
     if (init == LandmarkInitMethod::kInverseDepth) name += "+inverse_depth";
     if (m == Mechanization::kSensorCentricComposition && trig == CompositionTrigger::kEveryUpdate) {
       name += "+every_update";
     }
     if (zero_velocity) name += "+zero_velocity";
+    if (gate > 0.0) name += "+gate_" + formatGate(gate);
     all.emplace_back(name, c);
   };
   const auto fixed = LandmarkInitMethod::kFixedDepth, inv = LandmarkInitMethod::kInverseDepth;
@@ -170,6 +192,9 @@ std::vector<std::pair<std::string, EkfSlamConfig>> makeConfigs(const Options& o,
   add(Mechanization::kSensorCentricComposition, inv, every);
   // The node's default: the best one plus the zero-velocity update while standing.
   add(Mechanization::kSensorCentricComposition, inv, every, true);
+  // The same with the chi^2 gate of an outlier-free front end: the simulator has no outliers, so
+  // the 95% gate only drops the 5% of correct observations that would correct the largest errors.
+  add(Mechanization::kSensorCentricComposition, inv, every, true, kOutlierFreeGate);
   if (o.configs == "all") return all;
   std::vector<std::pair<std::string, EkfSlamConfig>> chosen;
   std::stringstream ss(o.configs);

@@ -185,6 +185,8 @@ FrameResult EkfSlam::processFrame(const CameraFrame& frame) {
     r.error = "frame older than the filter state";
     return r;
   }
+  // Before propagateTo consumes them: the IMU samples since the last frame.
+  const bool at_rest = imuAtRest(imu_, state_.timestamp, frame.timestamp, config_.zero_velocity);
   if (!propagateTo(frame.timestamp)) {
     r.error = "IMU does not reach the frame time yet";
     return r;
@@ -199,6 +201,11 @@ FrameResult EkfSlam::processFrame(const CameraFrame& frame) {
   for (const auto& f : frame.features) {
     if (!f.uv.allFinite()) continue;
     (state_.findLandmark(f.id) ? known : fresh).push_back(f);
+  }
+  const bool not_seen_moving = !r.stationary.has_history || r.stationary.stationary;
+  if (config_.zero_velocity.enabled && config_.zero_velocity.defer_landmarks && not_seen_moving && !at_rest) {
+    r.deferred_features = static_cast<int>(fresh.size());
+    fresh.clear();  // their tracks go on and become landmarks once the rig is seen moving
   }
   r.update = ekfUpdate(state_, known, camera_, T_b_c_, config_.update);
   for (const auto& f : known) last_seen_[f.id] = frame.timestamp;

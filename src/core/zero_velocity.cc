@@ -20,6 +20,7 @@ StationaryDetector::Decision StationaryDetector::update(const CameraFrame& frame
   // The reference frame: the newest one at least window_s old.
   while (history_.size() > 1 && history_[1].t <= frame.timestamp - params.window_s) history_.pop_front();
   if (!history_.empty() && frame.timestamp - history_.front().t >= params.window_s) {
+    d.has_history = true;
     const Past& ref = history_.front();
     const Mat3 R_now_ref = R_n_c.transpose() * ref.R_n_c;
     std::vector<double> disp;
@@ -41,6 +42,21 @@ StationaryDetector::Decision StationaryDetector::update(const CameraFrame& frame
   }
   history_.push_back(std::move(now));
   return d;
+}
+
+bool imuAtRest(const std::deque<ImuData>& imu, double t0, double t1, const ZeroVelocityParams& params) {
+  Vec3 sum = Vec3::Zero(), sum_sq = Vec3::Zero();
+  int n = 0;
+  for (const auto& s : imu) {
+    if (s.timestamp < t0 || s.timestamp > t1) continue;
+    if (!(s.wm.cwiseAbs().maxCoeff() < params.still_gyro_radps)) return false;
+    sum += s.am;
+    sum_sq += s.am.cwiseProduct(s.am);
+    ++n;
+  }
+  if (n < 2) return false;
+  const Vec3 var = (sum_sq - sum.cwiseProduct(sum) / n) / (n - 1);
+  return var.maxCoeff() < params.still_accel_std_mps2 * params.still_accel_std_mps2;
 }
 
 ZeroVelocityResult zeroVelocityUpdate(FilterState& state, const ZeroVelocityParams& params) {

@@ -337,6 +337,7 @@ void EkfSlamProcessor::output(const PendingImage& img, const CameraFrame& frame,
   s.landmarks_in_state = filter_->state().numLandmarks();
   s.tracks = last_tracks_;
   s.new_landmarks = static_cast<int>(r.new_ids.size());
+  s.deferred_features = r.deferred_features;
   s.removed_landmarks = static_cast<int>(r.removed_ids.size());
   s.accepted_observations = r.update.accepted;
   s.rejected_observations = static_cast<int>(r.update.rejected_ids.size());

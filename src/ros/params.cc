@@ -86,6 +86,11 @@ std::string fromReconfigure(const EkfSlamReconfigureConfig& c, NodeParams* p) {
   f.zero_velocity.window_s = c.zero_velocity_window_s;
   f.zero_velocity.max_parallax_px = c.zero_velocity_max_parallax_px;
   f.zero_velocity.velocity_sigma_mps = c.zero_velocity_sigma_mps;
+  f.zero_velocity.min_features = c.zero_velocity_min_features;
+  f.zero_velocity.gate_probability = c.zero_velocity_gate_probability;
+  f.zero_velocity.defer_landmarks = c.zero_velocity_defer_landmarks;
+  f.zero_velocity.still_accel_std_mps2 = c.zero_velocity_still_accel_std_mps2;
+  f.zero_velocity.still_gyro_radps = c.zero_velocity_still_gyro_radps;
   f.imu_noise.accel_noise_density = c.accel_noise_density;
   f.imu_noise.gyro_noise_density = c.gyro_noise_density;
   f.imu_noise.accel_random_walk = c.accel_random_walk;
@@ -198,6 +203,11 @@ EkfSlamReconfigureConfig toReconfigure(const NodeParams& p) {
   c.zero_velocity_window_s = f.zero_velocity.window_s;
   c.zero_velocity_max_parallax_px = f.zero_velocity.max_parallax_px;
   c.zero_velocity_sigma_mps = f.zero_velocity.velocity_sigma_mps;
+  c.zero_velocity_min_features = f.zero_velocity.min_features;
+  c.zero_velocity_gate_probability = f.zero_velocity.gate_probability;
+  c.zero_velocity_defer_landmarks = f.zero_velocity.defer_landmarks;
+  c.zero_velocity_still_accel_std_mps2 = f.zero_velocity.still_accel_std_mps2;
+  c.zero_velocity_still_gyro_radps = f.zero_velocity.still_gyro_radps;
   c.accel_noise_density = f.imu_noise.accel_noise_density;
   c.gyro_noise_density = f.imu_noise.gyro_noise_density;
   c.accel_random_walk = f.imu_noise.accel_random_walk;
@@ -244,6 +254,11 @@ std::string loadParams(const ParamSource& source, NodeParams* out) {
   rd("zero_velocity_window_s", c.zero_velocity_window_s);
   rd("zero_velocity_max_parallax_px", c.zero_velocity_max_parallax_px);
   rd("zero_velocity_sigma_mps", c.zero_velocity_sigma_mps);
+  rd("zero_velocity_min_features", c.zero_velocity_min_features);
+  rd("zero_velocity_gate_probability", c.zero_velocity_gate_probability);
+  rd("zero_velocity_defer_landmarks", c.zero_velocity_defer_landmarks);
+  rd("zero_velocity_still_accel_std_mps2", c.zero_velocity_still_accel_std_mps2);
+  rd("zero_velocity_still_gyro_radps", c.zero_velocity_still_gyro_radps);
   rd("accel_noise_density", c.accel_noise_density);
   rd("gyro_noise_density", c.gyro_noise_density);
   rd("accel_random_walk", c.accel_random_walk);
@@ -333,8 +348,12 @@ std::string describeParams(const NodeParams& p) {
     << " [s] pixel_noise_px=" << f.update.pixel_noise_px << " [px] gate_probability=" << f.update.gate_probability
     << "\n"
     << "  zero velocity: " << (f.zero_velocity.enabled ? "on" : "off") << ", window " << f.zero_velocity.window_s
-    << " [s], parallax < " << f.zero_velocity.max_parallax_px << " [px], sigma " << f.zero_velocity.velocity_sigma_mps
-    << " [m/s]\n"
+    << " [s], parallax < " << f.zero_velocity.max_parallax_px << " [px] over >= " << f.zero_velocity.min_features
+    << " features, sigma " << f.zero_velocity.velocity_sigma_mps << " [m/s], gate " << f.zero_velocity.gate_probability
+    << ", landmarks at start "
+    << (f.zero_velocity.defer_landmarks ? "wait until the rig is seen moving, unless at rest (accel std < "
+                                        : "at once (")
+    << f.zero_velocity.still_accel_std_mps2 << " [m/s^2], gyro < " << f.zero_velocity.still_gyro_radps << " [rad/s])\n"
     << "  imu noise: accel " << f.imu_noise.accel_noise_density << " [m/s^2/sqrt(Hz)], gyro "
     << f.imu_noise.gyro_noise_density << " [rad/s/sqrt(Hz)], accel walk " << f.imu_noise.accel_random_walk
     << " [m/s^3/sqrt(Hz)], gyro walk " << f.imu_noise.gyro_random_walk << " [rad/s^2/sqrt(Hz)]\n"

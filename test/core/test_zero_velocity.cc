@@ -1,5 +1,7 @@
 #include <gtest/gtest.h>
 
+#include <random>
+
 #include "test_helpers.h"
 #include "vi_ekf_slam/core/zero_velocity.h"
 
@@ -96,11 +98,39 @@ TEST(ZeroVelocity, DetectorTellsStandingAndTurningFromWalking) {
   EXPECT_FALSE(walking.stationary) << walking.parallax_px;
   const auto sidestep = decide([](double t) { return std::make_pair(Mat3::Identity(), Vec3(0.3 * t, 0, 0)); });
   EXPECT_FALSE(sidestep.stationary) << sidestep.parallax_px;
-  // Too few features: no decision.
+  // Too few features: no decision, although a window of history exists (has_history: new
+  // landmarks need not wait for a decision that a sparse scene never gives).
   StationaryDetector det;
   CameraFrame empty;
   for (int k = 0; k <= 28; ++k) {
     empty.timestamp = k / 28.0;
-    EXPECT_FALSE(det.update(empty, Mat3::Identity(), cam, params).decided);
+    const auto d = det.update(empty, Mat3::Identity(), cam, params);
+    EXPECT_FALSE(d.decided);
+    EXPECT_EQ(d.has_history, empty.timestamp >= params.window_s - 1e-9) << empty.timestamp;
   }
+}
+
+TEST(ZeroVelocity, ImuAtRestTellsAStillRigFromAJitteringOne) {
+  ZeroVelocityParams p;
+  std::mt19937_64 rng(5);
+  std::normal_distribution<double> noise(0.0, 1.0);
+  auto samples = [&](double accel_sigma, double gyro) {
+    std::deque<ImuData> imu;
+    for (int k = 0; k < 40; ++k) {
+      ImuData d;
+      d.timestamp = 0.005 * k;
+      d.am = Vec3(0.1, -0.2, 9.81) + accel_sigma * Vec3(noise(rng), noise(rng), noise(rng));
+      d.wm = Vec3(gyro, 0.001, -0.002);
+      imu.push_back(d);
+    }
+    return imu;
+  };
+  EXPECT_TRUE(imuAtRest(samples(0.05, 0.0), 0.0, 0.2, p));    // sensor noise of 5 mg
+  EXPECT_FALSE(imuAtRest(samples(1.0, 0.0), 0.0, 0.2, p));    // a hand-held rig's jitter
+  EXPECT_FALSE(imuAtRest(samples(0.05, 0.14), 0.0, 0.2, p));  // turning slowly
+  EXPECT_FALSE(imuAtRest(samples(0.05, 0.0), 0.3, 0.5, p));   // no sample in the interval
+  std::deque<ImuData> jolt = samples(0.05, 0.0);
+  jolt[30].am.x() += 5.0;  // a bump outside the interval does not count
+  EXPECT_TRUE(imuAtRest(jolt, 0.0, 0.1, p));
+  EXPECT_FALSE(imuAtRest(jolt, 0.0, 0.2, p));
 }

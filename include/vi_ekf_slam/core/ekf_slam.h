@@ -24,6 +24,7 @@ struct FrameResult {
   bool composed = false;
   StationaryDetector::Decision stationary;  ///< the standing test of this frame
   bool zero_velocity_applied = false;       ///< stationary and the zero-velocity update passed its gate
+  int deferred_features = 0;                ///< new tracks kept out of the map: rig neither seen moving nor at rest
 };
 
 class EkfSlam {

@@ -28,7 +28,22 @@ struct ZeroVelocityParams {
   /// zero-velocity pseudo-measurement.
   double velocity_sigma_mps = 0.03;
   double gate_probability = 0.999;  ///< chi^2 gate (3 dof): a moving filter refuses the update
+  /// A point first seen while the rig stands (or before the detector's first window, when
+  /// standing cannot be told from walking) has no parallax; when the rig sways or jitters in a
+  /// hand, its unknown depth enters later observations only through the product depth x sway,
+  /// which the linearized filter turns into false confidence in the velocity and, once walking
+  /// starts, in roll and pitch (README, TUM corridor). So new landmarks wait until the detector
+  /// sees the rig move, unless the IMU shows it at rest (zero parallax then pins the velocity
+  /// exactly, which is safe). Landmarks already in the map are updated as always.
+  bool defer_landmarks = true;
+  double still_accel_std_mps2 = 0.2;  ///< at rest: std-dev of each accelerometer axis below this [m/s^2]
+  double still_gyro_radps = 0.05;     ///< at rest: every angular rate below this [rad/s]
 };
+
+/// True if the samples of `imu` stamped in [t0, t1] (at least two) show a rig at rest: each
+/// accelerometer axis varies less than still_accel_std_mps2 and no angular rate exceeds
+/// still_gyro_radps (a pedestrian's torso, even standing, sways well above both).
+bool imuAtRest(const std::deque<ImuData>& imu, double t0, double t1, const ZeroVelocityParams& params);
 
 /// Decides from the tracked features whether the rig translated over the last window: each
 /// feature's ray from the start of the window is rotated into the current camera with the
@@ -37,8 +52,9 @@ struct ZeroVelocityParams {
 class StationaryDetector {
  public:
   struct Decision {
-    bool decided = false;     ///< enough history and features to tell
-    bool stationary = false;  ///< decided and the parallax is below the threshold
+    bool has_history = false;  ///< a frame at least window_s old was available
+    bool decided = false;      ///< enough history and features to tell
+    bool stationary = false;   ///< decided and the parallax is below the threshold
     double parallax_px = 0.0;
     int features = 0;
   };
