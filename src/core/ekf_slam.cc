@@ -30,6 +30,7 @@ void EkfSlam::reset() {
   state_ = FilterState(config_.mechanization);
   initialized_ = false;
   imu_.clear();
+  recent_imu_.clear();
   last_seen_.clear();
   compositions_ = 0;
   imu_gaps_ = 0;
@@ -74,6 +75,10 @@ bool EkfSlam::addImu(const ImuData& imu) {
   if (!imu_.empty() && imu.timestamp <= imu_.back().timestamp) return false;
   if (!imu_.empty() && imu.timestamp - imu_.back().timestamp > config_.max_imu_gap_s) ++imu_gaps_;
   imu_.push_back(imu);
+  recent_imu_.push_back(imu);
+  while (recent_imu_.front().timestamp < imu.timestamp - 2.0 * config_.zero_velocity.still_window_s) {
+    recent_imu_.pop_front();
+  }
   if (static_cast<int>(imu_.size()) > config_.imu_buffer_max) {
     // No image for a long time: integrate the oldest samples so the buffer stays bounded.
     if (initialized_) propagateTo(imu_[imu_.size() / 2].timestamp);
@@ -185,8 +190,9 @@ FrameResult EkfSlam::processFrame(const CameraFrame& frame) {
     r.error = "frame older than the filter state";
     return r;
   }
-  // Before propagateTo consumes them: the IMU samples since the last frame.
-  const bool at_rest = imuAtRest(imu_, state_.timestamp, frame.timestamp, config_.zero_velocity);
+  // From the samples kept for it (the caller may have propagated to the frame already).
+  const bool at_rest = imuAtRest(recent_imu_, frame.timestamp - config_.zero_velocity.still_window_s, frame.timestamp,
+                                 config_.zero_velocity);
   if (!propagateTo(frame.timestamp)) {
     r.error = "IMU does not reach the frame time yet";
     return r;
@@ -202,7 +208,9 @@ FrameResult EkfSlam::processFrame(const CameraFrame& frame) {
     if (!f.uv.allFinite()) continue;
     (state_.findLandmark(f.id) ? known : fresh).push_back(f);
   }
-  const bool not_seen_moving = !r.stationary.has_history || r.stationary.stationary;
+  // Standing only counts when the filter agrees (the zero-velocity update passed its gate): walking
+  // towards a distant scene can look like standing to the parallax test alone.
+  const bool not_seen_moving = !r.stationary.has_history || r.zero_velocity_applied;
   if (config_.zero_velocity.enabled && config_.zero_velocity.defer_landmarks && not_seen_moving && !at_rest) {
     r.deferred_features = static_cast<int>(fresh.size());
     fresh.clear();  // their tracks go on and become landmarks once the rig is seen moving

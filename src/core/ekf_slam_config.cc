@@ -74,6 +74,9 @@ std::string EkfSlamConfig::validate() const {
   requirePositive(err, "initial.accel_bias_mps2 [m/s^2]", initial.accel_bias_mps2);
   requirePositive(err, "initial.gyro_bias_radps [rad/s]", initial.gyro_bias_radps);
   requirePositive(err, "zero_velocity.window_s [s]", zero_velocity.window_s);
+  requirePositive(err, "zero_velocity.still_window_s [s]", zero_velocity.still_window_s);
+  requirePositive(err, "zero_velocity.still_accel_std_mps2 [m/s^2]", zero_velocity.still_accel_std_mps2);
+  requirePositive(err, "zero_velocity.still_gyro_radps [rad/s]", zero_velocity.still_gyro_radps);
   requirePositive(err, "zero_velocity.max_parallax_px [px]", zero_velocity.max_parallax_px);
   if (zero_velocity.min_features < 3) err << "zero_velocity.min_features must be >= 3\n";
   requirePositive(err, "zero_velocity.velocity_sigma_mps [m/s]", zero_velocity.velocity_sigma_mps);

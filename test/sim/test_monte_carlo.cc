@@ -3,6 +3,8 @@
 #include <fstream>
 
 #include "test_helpers.h"
+#include "vi_ekf_slam/sim/camera_simulator.h"
+#include "vi_ekf_slam/sim/imu_simulator.h"
 #include "vi_ekf_slam/sim/monte_carlo.h"
 #include "vi_ekf_slam/sim/scenarios.h"
 
@@ -205,4 +207,23 @@ TEST(MonteCarlo, AStartAtRestGetsItsLandmarksAtOnce) {
   const sim::RunResult run = sim::runMonteCarloRun(sc, c, 77);
   ASSERT_FALSE(run.frames.empty());
   EXPECT_GT(run.frames.front().new_landmarks, 20);
+
+  // The same when the caller has already propagated to the frame (the node does, to predict
+  // the tracker's rotation): the rest test must not depend on what propagation has consumed.
+  std::mt19937_64 rng(78);
+  const sim::ImuSequence imu = sim::simulateImu(*sc.trajectory, sc.imu, rng);
+  EkfSlam filter(c, sc.camera, sc.T_b_c);
+  const double t0 = sc.trajectory->startTime();
+  filter.initialize(sim::trueNavState(*sc.trajectory, t0));
+  const double t_frame = t0 + 1.0 / sc.cam.rate_hz;
+  for (const auto& d : imu.samples) {
+    if (d.timestamp > t_frame + 0.01) break;
+    filter.addImu(d);
+  }
+  ASSERT_TRUE(filter.propagateTo(t_frame));
+  sim::TrackingCamera camera(sc.world, sc.camera, sc.T_b_c, sc.cam);
+  const FrameResult r = filter.processFrame(camera.observe(sc.trajectory->sample(t_frame), &rng));
+  ASSERT_TRUE(r.processed) << r.error;
+  EXPECT_EQ(r.deferred_features, 0);
+  EXPECT_GT(r.new_ids.size(), 20u);
 }

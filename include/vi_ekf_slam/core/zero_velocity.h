@@ -38,6 +38,7 @@ struct ZeroVelocityParams {
   bool defer_landmarks = true;
   double still_accel_std_mps2 = 0.2;  ///< at rest: std-dev of each accelerometer axis below this [m/s^2]
   double still_gyro_radps = 0.05;     ///< at rest: every angular rate below this [rad/s]
+  double still_window_s = 0.1;        ///< the rest test looks at the IMU samples of this long before a frame [s]
 };
 
 /// True if the samples of `imu` stamped in [t0, t1] (at least two) show a rig at rest: each
