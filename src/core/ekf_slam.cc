@@ -76,9 +76,8 @@ bool EkfSlam::addImu(const ImuData& imu) {
   if (!imu_.empty() && imu.timestamp - imu_.back().timestamp > config_.max_imu_gap_s) ++imu_gaps_;
   imu_.push_back(imu);
   recent_imu_.push_back(imu);
-  while (recent_imu_.front().timestamp < imu.timestamp - 2.0 * config_.zero_velocity.still_window_s) {
-    recent_imu_.pop_front();
-  }
+  // Pruned by frame time in processFrame (the IMU may run ahead of the images); bounded here.
+  while (static_cast<int>(recent_imu_.size()) > config_.imu_buffer_max) recent_imu_.pop_front();
   if (static_cast<int>(imu_.size()) > config_.imu_buffer_max) {
     // No image for a long time: integrate the oldest samples so the buffer stays bounded.
     if (initialized_) propagateTo(imu_[imu_.size() / 2].timestamp);
