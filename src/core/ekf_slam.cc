@@ -192,6 +192,11 @@ FrameResult EkfSlam::processFrame(const CameraFrame& frame) {
   // From the samples kept for it (the caller may have propagated to the frame already).
   const bool at_rest = imuAtRest(recent_imu_, frame.timestamp - config_.zero_velocity.still_window_s, frame.timestamp,
                                  config_.zero_velocity);
+  // Later frames are newer: what is older than this frame's window is of no further use.
+  while (!recent_imu_.empty() &&
+         recent_imu_.front().timestamp < frame.timestamp - config_.zero_velocity.still_window_s) {
+    recent_imu_.pop_front();
+  }
   if (!propagateTo(frame.timestamp)) {
     r.error = "IMU does not reach the frame time yet";
     return r;

@@ -88,7 +88,7 @@ class EkfSlam {
   FilterState state_;
   bool initialized_ = false;
   std::deque<ImuData> imu_;
-  std::deque<ImuData> recent_imu_;  ///< recent samples for the rest test (bounded by imu_buffer_max)
+  std::deque<ImuData> recent_imu_;  ///< samples since the last frame's rest window (bounded by imu_buffer_max)
   std::unordered_map<std::int64_t, double> last_seen_;
   int compositions_ = 0;
   int imu_gaps_ = 0;
