@@ -15,6 +15,7 @@ using namespace vi_ekf_slam;
 EkfSlamConfig euroFeatureConfig() {
   EkfSlamConfig c;
   c.imu_noise = eval::eurocMavImuNoise();
+  c.zero_velocity.velocity_sigma_mps = eval::kEurocMavStandingVelocitySigma;
   c.update.pixel_noise_px = 2.0;
   c.landmark_timeout_s = 0.1;  // a lost track never comes back
   c.max_landmarks = 100;

@@ -36,6 +36,7 @@ void EkfSlam::reset() {
   imu_gaps_ = 0;
   zero_velocity_updates_ = 0;
   stationary_.reset();
+  seen_moving_ = false;
 }
 
 void EkfSlam::initialize(const NavState& init) {
@@ -63,6 +64,7 @@ void EkfSlam::initialize(const NavState& init) {
   state_ = std::move(s);
   last_seen_.clear();
   stationary_.reset();
+  seen_moving_ = false;
   compositions_ = 0;
   zero_velocity_updates_ = 0;
   initialized_ = true;
@@ -212,10 +214,17 @@ FrameResult EkfSlam::processFrame(const CameraFrame& frame) {
     if (!f.uv.allFinite()) continue;
     (state_.findLandmark(f.id) ? known : fresh).push_back(f);
   }
-  // Standing only counts when the filter agrees (the zero-velocity update passed its gate): walking
-  // towards a distant scene can look like standing to the parallax test alone.
-  const bool not_seen_moving = !r.stationary.has_history || r.zero_velocity_applied;
-  if (config_.zero_velocity.enabled && config_.zero_velocity.defer_landmarks && not_seen_moving && !at_rest) {
+  // "Seen moving" is latched: it ends with a stand and starts again once the parallax over the
+  // detector's window reaches moving_parallax_px. Standing only counts when the filter agrees (the
+  // zero-velocity update passed its gate): walking towards a distant scene can look like standing
+  // to the parallax test alone. A hand-held rig that is not quite standing (parallax between
+  // max_parallax_px and moving_parallax_px) still has too little baseline for a new point.
+  if (!r.stationary.has_history || r.zero_velocity_applied) {
+    seen_moving_ = false;
+  } else if (r.stationary.decided && r.stationary.parallax_px >= config_.zero_velocity.moving_parallax_px) {
+    seen_moving_ = true;
+  }
+  if (config_.zero_velocity.enabled && config_.zero_velocity.defer_landmarks && !seen_moving_ && !at_rest) {
     r.deferred_features = static_cast<int>(fresh.size());
     fresh.clear();  // their tracks go on and become landmarks once the rig is seen moving
   }

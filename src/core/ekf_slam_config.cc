@@ -78,6 +78,10 @@ std::string EkfSlamConfig::validate() const {
   requirePositive(err, "zero_velocity.still_accel_std_mps2 [m/s^2]", zero_velocity.still_accel_std_mps2);
   requirePositive(err, "zero_velocity.still_gyro_radps [rad/s]", zero_velocity.still_gyro_radps);
   requirePositive(err, "zero_velocity.max_parallax_px [px]", zero_velocity.max_parallax_px);
+  if (!(zero_velocity.moving_parallax_px >= zero_velocity.max_parallax_px)) {
+    err << "zero_velocity.moving_parallax_px [px] must be >= max_parallax_px (got " << zero_velocity.moving_parallax_px
+        << ")\n";
+  }
   if (zero_velocity.min_features < 3) err << "zero_velocity.min_features must be >= 3\n";
   requirePositive(err, "zero_velocity.velocity_sigma_mps [m/s]", zero_velocity.velocity_sigma_mps);
   if (!(zero_velocity.gate_probability > 0.0 && zero_velocity.gate_probability < 1.0)) {

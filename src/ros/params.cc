@@ -89,6 +89,7 @@ std::string fromReconfigure(const EkfSlamReconfigureConfig& c, NodeParams* p) {
   f.zero_velocity.min_features = c.zero_velocity_min_features;
   f.zero_velocity.gate_probability = c.zero_velocity_gate_probability;
   f.zero_velocity.defer_landmarks = c.zero_velocity_defer_landmarks;
+  f.zero_velocity.moving_parallax_px = c.zero_velocity_moving_parallax_px;
   f.zero_velocity.still_accel_std_mps2 = c.zero_velocity_still_accel_std_mps2;
   f.zero_velocity.still_gyro_radps = c.zero_velocity_still_gyro_radps;
   f.imu_noise.accel_noise_density = c.accel_noise_density;
@@ -206,6 +207,7 @@ EkfSlamReconfigureConfig toReconfigure(const NodeParams& p) {
   c.zero_velocity_min_features = f.zero_velocity.min_features;
   c.zero_velocity_gate_probability = f.zero_velocity.gate_probability;
   c.zero_velocity_defer_landmarks = f.zero_velocity.defer_landmarks;
+  c.zero_velocity_moving_parallax_px = f.zero_velocity.moving_parallax_px;
   c.zero_velocity_still_accel_std_mps2 = f.zero_velocity.still_accel_std_mps2;
   c.zero_velocity_still_gyro_radps = f.zero_velocity.still_gyro_radps;
   c.accel_noise_density = f.imu_noise.accel_noise_density;
@@ -257,6 +259,7 @@ std::string loadParams(const ParamSource& source, NodeParams* out) {
   rd("zero_velocity_min_features", c.zero_velocity_min_features);
   rd("zero_velocity_gate_probability", c.zero_velocity_gate_probability);
   rd("zero_velocity_defer_landmarks", c.zero_velocity_defer_landmarks);
+  rd("zero_velocity_moving_parallax_px", c.zero_velocity_moving_parallax_px);
   rd("zero_velocity_still_accel_std_mps2", c.zero_velocity_still_accel_std_mps2);
   rd("zero_velocity_still_gyro_radps", c.zero_velocity_still_gyro_radps);
   rd("accel_noise_density", c.accel_noise_density);
@@ -351,8 +354,10 @@ std::string describeParams(const NodeParams& p) {
     << " [s], parallax < " << f.zero_velocity.max_parallax_px << " [px] over >= " << f.zero_velocity.min_features
     << " features, sigma " << f.zero_velocity.velocity_sigma_mps << " [m/s], gate " << f.zero_velocity.gate_probability
     << ", landmarks at start "
-    << (f.zero_velocity.defer_landmarks ? "wait until the rig is seen moving, unless at rest (accel std < "
-                                        : "at once (")
+    << (f.zero_velocity.defer_landmarks ? "wait until the rig is seen moving (parallax >= " +
+                                              std::to_string(f.zero_velocity.moving_parallax_px) +
+                                              " [px]), unless at rest (accel std < "
+                                        : std::string("at once ("))
     << f.zero_velocity.still_accel_std_mps2 << " [m/s^2], gyro < " << f.zero_velocity.still_gyro_radps << " [rad/s])\n"
     << "  imu noise: accel " << f.imu_noise.accel_noise_density << " [m/s^2/sqrt(Hz)], gyro "
     << f.imu_noise.gyro_noise_density << " [rad/s/sqrt(Hz)], accel walk " << f.imu_noise.accel_random_walk

@@ -157,7 +157,7 @@ ConsistencySummary summarize(const std::string& name, const std::vector<RunResul
   std::vector<double> times;
   for (size_t k = 0; k < T; ++k) {
     double np = 0, nq = 0, npose = 0, e2 = 0;
-    Vec3 ap = Vec3::Zero(), av = Vec3::Zero(), aq = Vec3::Zero();
+    Vec3 ap = Vec3::Zero(), av = Vec3::Zero(), aq = Vec3::Zero(), aba = Vec3::Zero(), abg = Vec3::Zero();
     std::vector<double> g;
     for (const auto& r : runs) {
       const FrameMetrics& f = r.frames[k];
@@ -168,6 +168,8 @@ ConsistencySummary summarize(const std::string& name, const std::vector<RunResul
       ap += f.e_p.cwiseQuotient(f.s_p).cwiseAbs2() / M;
       av += f.e_v.cwiseQuotient(f.s_v).cwiseAbs2() / M;
       aq += f.e_q.cwiseQuotient(f.s_q).cwiseAbs2() / M;
+      aba += f.e_ba.cwiseQuotient(f.s_ba).cwiseAbs2() / M;
+      abg += f.e_bg.cwiseQuotient(f.s_bg).cwiseAbs2() / M;
       if (std::isfinite(f.gamma)) g.push_back(f.gamma);
       times.push_back(f.update_ms);
     }
@@ -181,6 +183,8 @@ ConsistencySummary summarize(const std::string& name, const std::vector<RunResul
     s.axis_p.push_back(ap);
     s.axis_v.push_back(av);
     s.axis_q.push_back(aq);
+    s.axis_ba.push_back(aba);
+    s.axis_bg.push_back(abg);
     if (std::isfinite(npose)) {
       ++counted;
       if (s.pose_band.contains(npose)) ++inside;

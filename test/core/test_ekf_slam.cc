@@ -55,12 +55,14 @@ TEST(EkfSlam, RejectsImpossibleConfiguration) {
   EkfSlamConfig cfg;
   cfg.update.pixel_noise_px = -1.0;
   cfg.max_landmarks = 0;
+  cfg.zero_velocity.moving_parallax_px = 0.5 * cfg.zero_velocity.max_parallax_px;  // "moving" while standing
   try {
     EkfSlam f(cfg, sim::paperCamera(), sim::torsoCameraExtrinsics());
     FAIL() << "expected an exception";
   } catch (const std::invalid_argument& e) {
     EXPECT_NE(std::string(e.what()).find("pixel_noise_px"), std::string::npos);
     EXPECT_NE(std::string(e.what()).find("max_landmarks"), std::string::npos);
+    EXPECT_NE(std::string(e.what()).find("moving_parallax_px"), std::string::npos);
   }
   CameraExtrinsics bad;
   bad.R_b_c = 2.0 * Mat3::Identity();

@@ -24,6 +24,7 @@ TEST(RealFeatures, BestConfigurationFollowsTheEurocGroundTruth) {
   ASSERT_EQ(data.frames.size(), 601u);
   EkfSlamConfig c;  // defaults: sensor_centric_composition, every update, inverse depth
   c.imu_noise = eval::eurocMavImuNoise();
+  c.zero_velocity.velocity_sigma_mps = eval::kEurocMavStandingVelocitySigma;  // as config/euroc.yaml
   c.update.pixel_noise_px = 2.0;
   c.landmark_timeout_s = 0.1;
   c.max_landmarks = 100;

@@ -94,6 +94,7 @@ class EkfSlam {
   int imu_gaps_ = 0;
   int zero_velocity_updates_ = 0;
   StationaryDetector stationary_;
+  bool seen_moving_ = false;  ///< parallax reached moving_parallax_px since the last stand (or start)
 };
 
 }  // namespace vi_ekf_slam

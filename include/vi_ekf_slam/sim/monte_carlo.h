@@ -77,8 +77,9 @@ struct ConsistencySummary {
   // the landmarks initialized in a frame make single runs spike (as the paper notes).
   std::vector<double> t, avg_nees_p, avg_nees_q, avg_nees_pose, median_gamma, rms_p;
   /// Per axis, run-averaged (e_i / sigma_i)^2 of position, velocity and orientation in {n}: 1 when
-  /// that axis is consistent; shows which direction an inconsistency lives in.
-  std::vector<Vec3> axis_p, axis_v, axis_q;
+  /// that axis is consistent; shows which direction an inconsistency lives in. The same for the
+  /// accelerometer and gyro biases (an overconfident gyro bias z is what drifts yaw unnoticed).
+  std::vector<Vec3> axis_p, axis_v, axis_q, axis_ba, axis_bg;
 };
 
 ConsistencySummary summarize(const std::string& name, const std::vector<RunResult>& runs);
