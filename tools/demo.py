@@ -41,7 +41,10 @@ def replay(bag, mech, out, config, rviz, rate, log):
     while time.time() < deadline and launch.poll() is None:
         r = subprocess.run(["rosrun", "dynamic_reconfigure", "dynparam", "set", "/vi_ekf_slam/filter",
                             "mechanization", mech], env=env, stdout=log, stderr=subprocess.STDOUT)
-        if r.returncode == 0:
+        # Read it back: a results table labelled with a mechanization that did not run is worse than none.
+        got = subprocess.run(["rosrun", "dynamic_reconfigure", "dynparam", "get", "/vi_ekf_slam/filter"], env=env,
+                             capture_output=True, text=True).stdout
+        if r.returncode == 0 and "'mechanization': '%s'" % mech in got:
             switched = True
             break
         time.sleep(0.5)

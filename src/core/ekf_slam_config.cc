@@ -84,6 +84,7 @@ std::string EkfSlamConfig::validate() const {
   }
   if (zero_velocity.min_features < 3) err << "zero_velocity.min_features must be >= 3\n";
   requirePositive(err, "zero_velocity.velocity_sigma_mps [m/s]", zero_velocity.velocity_sigma_mps);
+  requirePositive(err, "zero_velocity.rest_velocity_sigma_mps [m/s]", zero_velocity.rest_velocity_sigma_mps);
   if (!(zero_velocity.gate_probability > 0.0 && zero_velocity.gate_probability < 1.0)) {
     err << "zero_velocity.gate_probability must be in (0, 1) (got " << zero_velocity.gate_probability << ")\n";
   }

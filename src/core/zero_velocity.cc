@@ -59,12 +59,13 @@ bool imuAtRest(const std::deque<ImuData>& imu, double t0, double t1, const ZeroV
   return var.maxCoeff() < params.still_accel_std_mps2 * params.still_accel_std_mps2;
 }
 
-ZeroVelocityResult zeroVelocityUpdate(FilterState& state, const ZeroVelocityParams& params) {
+ZeroVelocityResult zeroVelocityUpdate(FilterState& state, const ZeroVelocityParams& params, bool at_rest) {
+  const double sigma = at_rest ? params.rest_velocity_sigma_mps : params.velocity_sigma_mps;
   ZeroVelocityResult res;
   Eigen::MatrixXd& P = state.mutableCovariance();
   const Eigen::MatrixXd B = P.middleCols<3>(idx::kV);  // P H^T, H = [0 I 0]
   Mat3 S = B.middleRows<3>(idx::kV);
-  S.diagonal().array() += params.velocity_sigma_mps * params.velocity_sigma_mps;
+  S.diagonal().array() += sigma * sigma;
   const Eigen::LLT<Mat3> llt(S);
   if (llt.info() != Eigen::Success) return res;
   const Vec3 r = -state.x.v_s_b;  // z - h(x) with z = 0

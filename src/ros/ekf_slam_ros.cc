@@ -37,17 +37,24 @@ EkfSlamRos::EkfSlamRos(ros::NodeHandle nh, ros::NodeHandle pnh) : nh_(nh), pnh_(
         return true;
       });
 
-  // dynamic_reconfigure starts from the validated parameters.
-  reconfigure_ = std::make_unique<dynamic_reconfigure::Server<EkfSlamReconfigureConfig>>(reconfigure_mutex_, pnh_);
-  reconfigure_->updateConfig(toReconfigure(params));
-  reconfigure_->setCallback([this](EkfSlamReconfigureConfig& c, uint32_t) {
-    std::lock_guard<std::mutex> lock(mutex_);
-    const std::string e = processor_->reconfigure(c);
-    if (!e.empty()) {
-      ROS_ERROR_STREAM("vi_ekf_slam: reconfigure rejected:\n" << e);
-      c = toReconfigure(processor_->params());
-    }
-  });
+  // dynamic_reconfigure starts from the validated parameters. The server offers set_parameters as
+  // soon as it is constructed: a request arriving before the callback is in place would be stored,
+  // then overwritten by updateConfig and never applied (a `dynparam set` right after start
+  // "succeeded" without effect), so the server's mutex is held until setup is complete and such a
+  // request waits, then goes through the callback.
+  {
+    boost::recursive_mutex::scoped_lock setup(reconfigure_mutex_);
+    reconfigure_ = std::make_unique<dynamic_reconfigure::Server<EkfSlamReconfigureConfig>>(reconfigure_mutex_, pnh_);
+    reconfigure_->updateConfig(toReconfigure(params));
+    reconfigure_->setCallback([this](EkfSlamReconfigureConfig& c, uint32_t) {
+      std::lock_guard<std::mutex> lock(mutex_);
+      const std::string e = processor_->reconfigure(c);
+      if (!e.empty()) {
+        ROS_ERROR_STREAM("vi_ekf_slam: reconfigure rejected:\n" << e);
+        c = toReconfigure(processor_->params());
+      }
+    });
+  }
 
   imu_sub_ = nh_.subscribe<sensor_msgs::Imu>(
       "imu", 2000,

@@ -86,6 +86,7 @@ std::string fromReconfigure(const EkfSlamReconfigureConfig& c, NodeParams* p) {
   f.zero_velocity.window_s = c.zero_velocity_window_s;
   f.zero_velocity.max_parallax_px = c.zero_velocity_max_parallax_px;
   f.zero_velocity.velocity_sigma_mps = c.zero_velocity_sigma_mps;
+  f.zero_velocity.rest_velocity_sigma_mps = c.zero_velocity_rest_sigma_mps;
   f.zero_velocity.min_features = c.zero_velocity_min_features;
   f.zero_velocity.gate_probability = c.zero_velocity_gate_probability;
   f.zero_velocity.defer_landmarks = c.zero_velocity_defer_landmarks;
@@ -204,6 +205,7 @@ EkfSlamReconfigureConfig toReconfigure(const NodeParams& p) {
   c.zero_velocity_window_s = f.zero_velocity.window_s;
   c.zero_velocity_max_parallax_px = f.zero_velocity.max_parallax_px;
   c.zero_velocity_sigma_mps = f.zero_velocity.velocity_sigma_mps;
+  c.zero_velocity_rest_sigma_mps = f.zero_velocity.rest_velocity_sigma_mps;
   c.zero_velocity_min_features = f.zero_velocity.min_features;
   c.zero_velocity_gate_probability = f.zero_velocity.gate_probability;
   c.zero_velocity_defer_landmarks = f.zero_velocity.defer_landmarks;
@@ -256,6 +258,7 @@ std::string loadParams(const ParamSource& source, NodeParams* out) {
   rd("zero_velocity_window_s", c.zero_velocity_window_s);
   rd("zero_velocity_max_parallax_px", c.zero_velocity_max_parallax_px);
   rd("zero_velocity_sigma_mps", c.zero_velocity_sigma_mps);
+  rd("zero_velocity_rest_sigma_mps", c.zero_velocity_rest_sigma_mps);
   rd("zero_velocity_min_features", c.zero_velocity_min_features);
   rd("zero_velocity_gate_probability", c.zero_velocity_gate_probability);
   rd("zero_velocity_defer_landmarks", c.zero_velocity_defer_landmarks);
@@ -352,7 +355,8 @@ std::string describeParams(const NodeParams& p) {
     << "\n"
     << "  zero velocity: " << (f.zero_velocity.enabled ? "on" : "off") << ", window " << f.zero_velocity.window_s
     << " [s], parallax < " << f.zero_velocity.max_parallax_px << " [px] over >= " << f.zero_velocity.min_features
-    << " features, sigma " << f.zero_velocity.velocity_sigma_mps << " [m/s], gate " << f.zero_velocity.gate_probability
+    << " features, sigma " << f.zero_velocity.velocity_sigma_mps << " [m/s] (at rest "
+    << f.zero_velocity.rest_velocity_sigma_mps << " [m/s]), gate " << f.zero_velocity.gate_probability
     << ", landmarks at start "
     << (f.zero_velocity.defer_landmarks ? "wait until the rig is seen moving (parallax >= " +
                                               std::to_string(f.zero_velocity.moving_parallax_px) +

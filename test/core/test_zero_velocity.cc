@@ -9,6 +9,8 @@ using namespace vi_ekf_slam;
 
 TEST(ZeroVelocity, UpdateEqualsTextbookJosephForm) {
   std::mt19937_64 rng(4);
+  // Standing while swaying uses velocity_sigma_mps; with the IMU at rest too, rest_velocity_sigma_mps.
+  for (const bool at_rest : {false, true})
   for (Mechanization m : {Mechanization::kWorldCentric, Mechanization::kSensorCentricComposition}) {
     FilterState s = test::randomState(m, 4, rng);
     s.x.v_s_b = Vec3(0.03, -0.02, 0.01);  // near zero: passes the gate
@@ -16,11 +18,13 @@ TEST(ZeroVelocity, UpdateEqualsTextbookJosephForm) {
     const Eigen::MatrixXd P = s.covariance();
     ZeroVelocityParams params;
     params.velocity_sigma_mps = 0.05;
-    const ZeroVelocityResult r = zeroVelocityUpdate(s, params);
+    params.rest_velocity_sigma_mps = 0.02;
+    const double sigma = at_rest ? 0.02 : 0.05;
+    const ZeroVelocityResult r = zeroVelocityUpdate(s, params, at_rest);
     ASSERT_TRUE(r.applied);
     Eigen::MatrixXd H = Eigen::MatrixXd::Zero(3, s.dim());
     H.middleCols<3>(idx::kV).setIdentity();
-    const Mat3 R = 0.05 * 0.05 * Mat3::Identity();
+    const Mat3 R = sigma * sigma * Mat3::Identity();
     const Mat3 S = H * P * H.transpose() + R;
     const Eigen::MatrixXd K = P * H.transpose() * S.inverse();
     const Eigen::MatrixXd IKH = Eigen::MatrixXd::Identity(s.dim(), s.dim()) - K * H;
@@ -32,7 +36,7 @@ TEST(ZeroVelocity, UpdateEqualsTextbookJosephForm) {
     EXPECT_LT((dx - K * r_v).cwiseAbs().maxCoeff(), 1e-12);
     // The velocity moved towards zero and its uncertainty is below the pseudo-measurement's.
     EXPECT_LT(s.x.v_s_b.norm(), before.x.v_s_b.norm());
-    EXPECT_LT((s.covariance().block<3, 3>(idx::kV, idx::kV).trace()), 3 * 0.05 * 0.05);
+    EXPECT_LT((s.covariance().block<3, 3>(idx::kV, idx::kV).trace()), 3 * sigma * sigma);
   }
 }
 
@@ -41,7 +45,7 @@ TEST(ZeroVelocity, GateRefusesAMovingFilter) {
   FilterState s = test::randomState(Mechanization::kSensorCentric, 2, rng);
   s.x.v_s_b = Vec3(1.3, 0.0, 0.0);  // walking, far outside sqrt(P_vv + R)
   const FilterState before = s;
-  EXPECT_FALSE(zeroVelocityUpdate(s, ZeroVelocityParams()).applied);
+  EXPECT_FALSE(zeroVelocityUpdate(s, ZeroVelocityParams(), false).applied);
   EXPECT_EQ(s.x.v_s_b, before.x.v_s_b);
   EXPECT_EQ(s.covariance(), before.covariance());
 }
