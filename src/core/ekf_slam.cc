@@ -206,7 +206,8 @@ FrameResult EkfSlam::processFrame(const CameraFrame& frame) {
   if (config_.zero_velocity.enabled) {
     const Mat3 R_n_c = (state_.x.q_n_s * state_.x.q_s_b).toRotationMatrix() * T_b_c_.R_b_c;
     r.stationary = stationary_.update(frame, R_n_c, camera_, config_.zero_velocity);
-    if (r.stationary.stationary) r.zero_velocity_applied = zeroVelocityUpdate(state_, config_.zero_velocity, at_rest).applied;
+    if (r.stationary.stationary)
+      r.zero_velocity_applied = zeroVelocityUpdate(state_, config_.zero_velocity, at_rest).applied;
     if (r.zero_velocity_applied) ++zero_velocity_updates_;
   }
   std::vector<FeatureObservation> known, fresh;

@@ -357,11 +357,8 @@ std::string describeParams(const NodeParams& p) {
     << " [s], parallax < " << f.zero_velocity.max_parallax_px << " [px] over >= " << f.zero_velocity.min_features
     << " features, sigma " << f.zero_velocity.velocity_sigma_mps << " [m/s] (at rest "
     << f.zero_velocity.rest_velocity_sigma_mps << " [m/s]), gate " << f.zero_velocity.gate_probability
-    << ", landmarks at start "
-    << (f.zero_velocity.defer_landmarks ? "wait until the rig is seen moving (parallax >= " +
-                                              std::to_string(f.zero_velocity.moving_parallax_px) +
-                                              " [px]), unless at rest (accel std < "
-                                        : std::string("at once ("))
+    << ", new landmarks " << (f.zero_velocity.defer_landmarks ? "wait until the rig is seen moving" : "enter at once")
+    << " (moving: parallax >= " << f.zero_velocity.moving_parallax_px << " [px]; at rest: accel std < "
     << f.zero_velocity.still_accel_std_mps2 << " [m/s^2], gyro < " << f.zero_velocity.still_gyro_radps << " [rad/s])\n"
     << "  imu noise: accel " << f.imu_noise.accel_noise_density << " [m/s^2/sqrt(Hz)], gyro "
     << f.imu_noise.gyro_noise_density << " [rad/s/sqrt(Hz)], accel walk " << f.imu_noise.accel_random_walk

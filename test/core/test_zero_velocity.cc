@@ -11,33 +11,33 @@ TEST(ZeroVelocity, UpdateEqualsTextbookJosephForm) {
   std::mt19937_64 rng(4);
   // Standing while swaying uses velocity_sigma_mps; with the IMU at rest too, rest_velocity_sigma_mps.
   for (const bool at_rest : {false, true})
-  for (Mechanization m : {Mechanization::kWorldCentric, Mechanization::kSensorCentricComposition}) {
-    FilterState s = test::randomState(m, 4, rng);
-    s.x.v_s_b = Vec3(0.03, -0.02, 0.01);  // near zero: passes the gate
-    const FilterState before = s;
-    const Eigen::MatrixXd P = s.covariance();
-    ZeroVelocityParams params;
-    params.velocity_sigma_mps = 0.05;
-    params.rest_velocity_sigma_mps = 0.02;
-    const double sigma = at_rest ? 0.02 : 0.05;
-    const ZeroVelocityResult r = zeroVelocityUpdate(s, params, at_rest);
-    ASSERT_TRUE(r.applied);
-    Eigen::MatrixXd H = Eigen::MatrixXd::Zero(3, s.dim());
-    H.middleCols<3>(idx::kV).setIdentity();
-    const Mat3 R = sigma * sigma * Mat3::Identity();
-    const Mat3 S = H * P * H.transpose() + R;
-    const Eigen::MatrixXd K = P * H.transpose() * S.inverse();
-    const Eigen::MatrixXd IKH = Eigen::MatrixXd::Identity(s.dim(), s.dim()) - K * H;
-    const Eigen::MatrixXd P_joseph = IKH * P * IKH.transpose() + K * R * K.transpose();
-    EXPECT_LT((s.covariance() - P_joseph).cwiseAbs().maxCoeff(), 1e-12);
-    const Vec3 r_v = -before.x.v_s_b;
-    EXPECT_NEAR(r.nis, r_v.dot(S.inverse() * r_v), 1e-9);
-    const Eigen::VectorXd dx = s.boxminus(before);
-    EXPECT_LT((dx - K * r_v).cwiseAbs().maxCoeff(), 1e-12);
-    // The velocity moved towards zero and its uncertainty is below the pseudo-measurement's.
-    EXPECT_LT(s.x.v_s_b.norm(), before.x.v_s_b.norm());
-    EXPECT_LT((s.covariance().block<3, 3>(idx::kV, idx::kV).trace()), 3 * sigma * sigma);
-  }
+    for (Mechanization m : {Mechanization::kWorldCentric, Mechanization::kSensorCentricComposition}) {
+      FilterState s = test::randomState(m, 4, rng);
+      s.x.v_s_b = Vec3(0.03, -0.02, 0.01);  // near zero: passes the gate
+      const FilterState before = s;
+      const Eigen::MatrixXd P = s.covariance();
+      ZeroVelocityParams params;
+      params.velocity_sigma_mps = 0.05;
+      params.rest_velocity_sigma_mps = 0.02;
+      const double sigma = at_rest ? 0.02 : 0.05;
+      const ZeroVelocityResult r = zeroVelocityUpdate(s, params, at_rest);
+      ASSERT_TRUE(r.applied);
+      Eigen::MatrixXd H = Eigen::MatrixXd::Zero(3, s.dim());
+      H.middleCols<3>(idx::kV).setIdentity();
+      const Mat3 R = sigma * sigma * Mat3::Identity();
+      const Mat3 S = H * P * H.transpose() + R;
+      const Eigen::MatrixXd K = P * H.transpose() * S.inverse();
+      const Eigen::MatrixXd IKH = Eigen::MatrixXd::Identity(s.dim(), s.dim()) - K * H;
+      const Eigen::MatrixXd P_joseph = IKH * P * IKH.transpose() + K * R * K.transpose();
+      EXPECT_LT((s.covariance() - P_joseph).cwiseAbs().maxCoeff(), 1e-12);
+      const Vec3 r_v = -before.x.v_s_b;
+      EXPECT_NEAR(r.nis, r_v.dot(S.inverse() * r_v), 1e-9);
+      const Eigen::VectorXd dx = s.boxminus(before);
+      EXPECT_LT((dx - K * r_v).cwiseAbs().maxCoeff(), 1e-12);
+      // The velocity moved towards zero and its uncertainty is below the pseudo-measurement's.
+      EXPECT_LT(s.x.v_s_b.norm(), before.x.v_s_b.norm());
+      EXPECT_LT((s.covariance().block<3, 3>(idx::kV, idx::kV).trace()), 3 * sigma * sigma);
+    }
 }
 
 TEST(ZeroVelocity, GateRefusesAMovingFilter) {
