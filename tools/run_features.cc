@@ -10,21 +10,6 @@
 
 using namespace vi_ekf_slam;
 
-/// Settings for the EuRoC VI-sensor: datasheet densities inflated for the MAV's vibration (the
-/// EqVIO settings in the file use 6x the accelerometer density), EqVIO's 1.9 px feature noise.
-EkfSlamConfig euroFeatureConfig() {
-  EkfSlamConfig c;
-  c.imu_noise = eval::eurocMavImuNoise();
-  c.zero_velocity.velocity_sigma_mps = eval::kEurocMavStandingVelocitySigma;
-  c.update.pixel_noise_px = 2.0;
-  c.landmark_timeout_s = 0.1;  // a lost track never comes back
-  c.max_landmarks = 100;
-  c.initial.position_m = 0.0;  // the estimate defines its frame at the start
-  c.initial.yaw_rad = 0.0;
-  c.initial.roll_pitch_rad = 0.01;
-  return c;
-}
-
 int main(int argc, char** argv) {
   std::string data_dir = std::getenv("DATA_DIR") ? std::getenv("DATA_DIR") : "../shared/data";
   std::string out = "results/run_features";
@@ -65,7 +50,7 @@ int main(int argc, char** argv) {
   for (auto init : {LandmarkInitMethod::kFixedDepth, LandmarkInitMethod::kInverseDepth}) {
     for (auto m :
          {Mechanization::kWorldCentric, Mechanization::kSensorCentric, Mechanization::kSensorCentricComposition}) {
-      EkfSlamConfig c = euroFeatureConfig();
+      EkfSlamConfig c = eval::eurocFeatureReplayConfig();
       c.mechanization = m;
       c.landmark_init = init;
       if (gate > 0.0) c.update.gate_probability = gate;

@@ -8,6 +8,19 @@
 
 namespace vi_ekf_slam::eval {
 
+EkfSlamConfig eurocFeatureReplayConfig() {
+  EkfSlamConfig c;
+  c.imu_noise = eurocMavImuNoise();  // datasheet densities inflated as EqVIO's settings do (6x accel)
+  c.zero_velocity.velocity_sigma_mps = kEurocMavStandingVelocitySigma;
+  c.update.pixel_noise_px = 2.0;
+  c.landmark_timeout_s = 0.1;  // a lost track never comes back
+  c.max_landmarks = 100;
+  c.initial.position_m = 0.0;  // the estimate defines its frame at the start
+  c.initial.yaw_rad = 0.0;
+  c.initial.roll_pitch_rad = 0.01;
+  return c;
+}
+
 EstimatedPose worldPoseFromNav(const NavState& nav) {
   EstimatedPose e;
   e.t = nav.timestamp;

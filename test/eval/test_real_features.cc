@@ -23,15 +23,9 @@ TEST(RealFeatures, BestConfigurationFollowsTheEurocGroundTruth) {
   if (!std::ifstream(csv) || !std::ifstream(gt)) GTEST_SKIP() << "real data not found in " << dir;
   const eval::FeatureTrackData data = eval::readEqvioCsv(csv);
   ASSERT_EQ(data.frames.size(), 601u);
-  EkfSlamConfig c;  // defaults: sensor_centric_composition, every update, inverse depth
-  c.imu_noise = eval::eurocMavImuNoise();
-  c.zero_velocity.velocity_sigma_mps = eval::kEurocMavStandingVelocitySigma;  // as config/euroc.yaml
-  c.update.pixel_noise_px = 2.0;
-  c.landmark_timeout_s = 0.1;
-  c.max_landmarks = 100;
-  c.initial.position_m = 0.0;
-  c.initial.yaw_rad = 0.0;
-  c.initial.roll_pitch_rad = 0.01;
+  // Defaults (sensor_centric_composition, every update, inverse depth) with the EuRoC settings of
+  // vi_ekf_slam_run_features.
+  const EkfSlamConfig c = eval::eurocFeatureReplayConfig();
   const auto r = eval::replayFeatures(data, eval::toStampedPoses(eval::readAslGroundTruth(gt)), c, StaticInitParams());
   EXPECT_GT(r.frames_processed, 500);
   EXPECT_GT(r.rejected_observations, 0);  // the take-off mismatches must be gated out

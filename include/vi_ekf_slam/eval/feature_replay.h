@@ -22,6 +22,12 @@ struct FeatureReplayResult {
   double init_time = 0.0;  ///< when the static initialization finished [s]
 };
 
+/// The filter settings for the EqVIO tracks of EuRoC V1_01 (the default configuration otherwise):
+/// the VI-sensor's densities inflated for the MAV's vibration, EqVIO's ~2 px feature noise, the
+/// zero-velocity noise of a MAV standing on the ground, lost tracks dropped at once, and a start
+/// that defines the estimate's frame (no position or yaw uncertainty).
+EkfSlamConfig eurocFeatureReplayConfig();
+
 /// Throws std::runtime_error if the data never shows a static interval.
 FeatureReplayResult replayFeatures(const FeatureTrackData& data, const std::vector<StampedPose>& truth,
                                    const EkfSlamConfig& config, const StaticInitParams& static_init);
