@@ -171,8 +171,12 @@ void FeatureTracker::detect(const cv::Mat& img) {
       if (cv::countNonZero(mask(roi)) == 0) continue;
       std::vector<cv::Point2f> pts;
       std::vector<float> quality;
-      // The quality floor is applied below against the best of all cells, not this one's.
-      cv::goodFeaturesToTrack(img(roi), pts, max_candidates, 1e-3, params_.min_distance_px, mask(roi), quality, 3);
+      // The quality floor is applied below against the best of all cells. Asking each cell for
+      // quality_level of its own best already drops only corners below that floor (a cell's best
+      // is at most the overall best), so the result is the same as with a lower per-cell level,
+      // but far fewer weak local maxima are collected and sorted.
+      cv::goodFeaturesToTrack(img(roi), pts, max_candidates, params_.quality_level, params_.min_distance_px, mask(roi),
+                              quality, 3);
       for (size_t i = 0; i < pts.size(); ++i) cand.push_back({pts[i] + offset, quality[i]});
     } else {
       std::vector<cv::KeyPoint> kps;
