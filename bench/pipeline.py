@@ -53,6 +53,7 @@ def main():
     result["offline_real_time_factor_1core"] = round(s["real_time_factor"], 2)
     result["offline_ms_per_frame_mean"] = round(s["processing_ms_mean"], 2)
     result["offline_ms_per_frame_p95"] = round(s["processing_ms_p95"], 2)
+    result["offline_tracker_ms_per_frame"] = round(s["tracker_ms_mean"], 2)
     with open(os.path.join(a.out, "roslaunch.log"), "w") as log:
         rec = replay(os.path.abspath(a.bag), MECH, a.out, os.path.abspath(a.config), False, 1.0, log)
     lat = odom_latency_ms(rec)

@@ -262,7 +262,9 @@ void EkfSlamProcessor::processImage(const PendingImage& img) {
     const Mat3& R_b_c = extrinsics_->R_b_c;
     R_cur_prev = R_b_c.transpose() * R_b * R_b_c;
   }
+  const auto tracker_tic = std::chrono::steady_clock::now();
   const CameraFrame frame = tracker_->track(img.t, img.mono, R_cur_prev);
+  last_tracker_ms_ = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - tracker_tic).count();
   last_tracks_ = tracker_->stats().total;
   const FrameResult r = filter_->processFrame(frame);
   last_update_ms_ = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - tic).count();
@@ -347,6 +349,7 @@ void EkfSlamProcessor::output(const PendingImage& img, const CameraFrame& frame,
   s.zero_velocity_updates = filter_->zeroVelocityUpdates();
   s.resets = static_cast<int>(counters_.resets);
   s.update_time_ms = last_update_ms_;
+  s.tracker_time_ms = last_tracker_ms_;
   const Vec3 g_b = nav.q_n_b.conjugate() * gravityInNav(params_.filter.gravity_mps2);
   s.gravity_body.x = g_b.x();
   s.gravity_body.y = g_b.y();

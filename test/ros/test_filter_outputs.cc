@@ -166,6 +166,10 @@ TEST(FilterNode, BehavesOnThisInputStream) {
     EXPECT_GT(rec.status.size(), 20u) << "status messages";
     if (!rec.status.empty()) {
       EXPECT_GT(rec.status.back().landmarks_in_state, 0);
+      for (const auto& st : rec.status) {  // the front end's time is a part of the image's time
+        EXPECT_TRUE(st.tracker_time_ms >= 0.0 && st.tracker_time_ms <= st.update_time_ms)
+            << st.tracker_time_ms << " of " << st.update_time_ms << " ms";
+      }
     }
   } else {
     EXPECT_TRUE(rec.odom.empty()) << "odometry published although it should not";

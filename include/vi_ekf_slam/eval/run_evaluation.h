@@ -4,6 +4,7 @@
 // physical). Covariances rotate with that registration, which keeps NEES meaningful.
 #pragma once
 
+#include <cmath>
 #include <functional>
 #include <optional>
 #include <string>
@@ -22,6 +23,7 @@ struct EstimatedPose {
   Quat q = Quat::Identity();
   Eigen::Matrix<double, 6, 6> cov = Eigen::Matrix<double, 6, 6>::Zero();  ///< [position, orientation (global)]
   double processing_ms = 0.0;
+  double tracker_ms = std::nan("");  ///< the front end's part of processing_ms, if known
 };
 
 struct EstimatedLandmark {
@@ -58,7 +60,8 @@ struct RunMetrics {
   double map_error_p90_m = 0.0;
   int map_landmarks = 0;  ///< landmarks of the final map with a known truth
   double processing_ms_mean = 0.0, processing_ms_p95 = 0.0;
-  double real_time_factor = 0.0;  ///< duration / total processing time
+  double tracker_ms_mean = std::nan("");  ///< of processing_ms_mean: the front end (NaN: not measured)
+  double real_time_factor = 0.0;          ///< duration / total processing time
   std::vector<RunFrame> series;
 };
 

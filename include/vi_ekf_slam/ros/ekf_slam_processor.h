@@ -115,7 +115,7 @@ class EkfSlamProcessor {
   double last_processed_t_ = -1e300;  ///< stamp of the last processed image [s]
   InputCounters counters_;
   int last_tracks_ = 0;
-  double last_update_ms_ = 0.0, total_processing_ms_ = 0.0;
+  double last_update_ms_ = 0.0, last_tracker_ms_ = 0.0, total_processing_ms_ = 0.0;
   std::string last_problem_;
 };
 
