@@ -14,6 +14,9 @@
 #include "vi_ekf_slam/core/feature_tracker.h"
 #include "vi_ekf_slam/core/so3.h"
 
+// After Eigen (pulled in above): OpenCV's Eigen bridge needs it first.
+#include <opencv2/core/eigen.hpp>
+
 namespace vi_ekf_slam {
 namespace {
 
@@ -63,8 +66,7 @@ TEST(FeatureTracker, GyroPredictionLetsKltFollowALargeRotation) {
   // than the 3-level pyramid's reach of 56 px) and 2 deg about its optical axis.
   const Eigen::Matrix3d R_cur_prev = expSO3(Vec3(0.0, 10.0, 2.0) * M_PI / 180.0);
   cv::Matx33d R;
-  for (int i = 0; i < 3; ++i)
-    for (int j = 0; j < 3; ++j) R(i, j) = R_cur_prev(i, j);
+  cv::eigen2cv(R_cur_prev, R);
   const cv::Matx33d K = intrinsicMatrix(cam);
   const cv::Matx33d H = K * R * K.inv();
   cv::Mat img1;
