@@ -8,6 +8,7 @@
 #include <tf2_msgs/TFMessage.h>
 #include <rosbag/view.h>
 #include <algorithm>
+#include <boost/make_shared.hpp>
 
 #include "vi_ekf_slam/core/frames.h"
 #include "vi_ekf_slam/ros/conversions.h"
@@ -34,7 +35,18 @@ RigBagWriter::RigBagWriter(const std::string& path, const RigTopics& topics, con
   tf2::toMsg(T_b_c.p_b_c, T.transform.translation);
   T.transform.rotation = tf2::toMsg(Quat(T_b_c.R_b_c));
   tf.transforms.push_back(T);
-  bag_.write("/tf_static", start, tf);
+  // Marked latched, as `rosbag record` stores /tf_static from tf2's latched publishers, so that
+  // `rosbag play` re-publishes it latched: the bag has this one message, and a TF listener that
+  // connects after it went out (rosbag play waits only 0.2 s after advertising) would otherwise
+  // never learn the camera-IMU extrinsic.
+  // A given connection header replaces rosbag's own, so it carries the type fields too.
+  auto connection = boost::make_shared<ros::M_string>();
+  (*connection)["type"] = ros::message_traits::datatype(tf);
+  (*connection)["md5sum"] = ros::message_traits::md5sum(tf);
+  (*connection)["message_definition"] = ros::message_traits::definition(tf);
+  (*connection)["callerid"] = "/vi_ekf_slam_bag_writer";
+  (*connection)["latching"] = "1";
+  bag_.write("/tf_static", start, tf, connection);
 }
 
 void RigBagWriter::imu(const ImuData& d) {

@@ -63,7 +63,7 @@ std::shared_ptr<BsplineTrajectory> loopWalk(const HallwayParams& g, const LoopPa
     const Quat q = Quat(Eigen::AngleAxisd(yaw + walking * g.yaw_sway_rad * std::sin(stride), Vec3::UnitZ())) *
                    Quat(Eigen::AngleAxisd(walking * g.pitch_bob_rad * std::sin(step), Vec3::UnitY())) *
                    Quat(Eigen::AngleAxisd(walking * g.roll_sway_rad * std::sin(stride), Vec3::UnitX()));
-    poses.push_back({t, p, q.normalized()});
+    poses.push_back({t, p, q.normalized(), std::nullopt});
   }
   return std::make_shared<BsplineTrajectory>(poses, dt);
 }
