@@ -21,6 +21,7 @@ std::string TrackerParams::validate() const {
   if (!(fb_threshold_px > 0.0)) err << "fb_threshold_px must be > 0\n";
   if (!(ransac_threshold_px > 0.0)) err << "ransac_threshold_px must be > 0\n";
   if (border_px < 0) err << "border_px must be >= 0\n";
+  if (!(redetect_fraction > 0.0 && redetect_fraction <= 1.0)) err << "redetect_fraction must be in (0, 1]\n";
   return err.str();
 }
 
@@ -120,7 +121,10 @@ CameraFrame FeatureTracker::track(double timestamp, const cv::Mat& img,
   } else {
     tracks_.clear();
   }
-  if (static_cast<int>(tracks_.size()) < params_.max_tracks) detect(img);
+  // The corner search costs the same whether one track or ten are missing (every cell below
+  // its quota is searched), so it can wait until redetect_fraction of the tracks are left.
+  const double n = static_cast<double>(tracks_.size());
+  if (n < params_.max_tracks && n < params_.redetect_fraction * params_.max_tracks) detect(img);
   prev_pyramid_ = std::move(pyramid);
   prev_image_ = img;
   CameraFrame f;

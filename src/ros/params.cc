@@ -110,6 +110,7 @@ std::string fromReconfigure(const EkfSlamReconfigureConfig& c, NodeParams* p) {
   t.klt_pyramid_levels = c.klt_pyramid_levels;
   t.fb_threshold_px = c.fb_threshold_px;
   t.ransac_threshold_px = c.ransac_threshold_px;
+  t.redetect_fraction = c.redetect_fraction;
   err << f.validate() << t.validate();
   return err.str();
 }
@@ -226,6 +227,7 @@ EkfSlamReconfigureConfig toReconfigure(const NodeParams& p) {
   c.klt_pyramid_levels = t.klt_pyramid_levels;
   c.fb_threshold_px = t.fb_threshold_px;
   c.ransac_threshold_px = t.ransac_threshold_px;
+  c.redetect_fraction = t.redetect_fraction;
   return c;
 }
 
@@ -278,6 +280,7 @@ std::string loadParams(const ParamSource& source, NodeParams* out) {
   rd("klt_pyramid_levels", c.klt_pyramid_levels);
   rd("fb_threshold_px", c.fb_threshold_px);
   rd("ransac_threshold_px", c.ransac_threshold_px);
+  rd("redetect_fraction", c.redetect_fraction);
 
   // Start-up only.
   EkfSlamConfig& f = p.filter;
@@ -373,7 +376,7 @@ std::string describeParams(const NodeParams& p) {
     << " min_distance_px=" << t.min_distance_px << " quality_level=" << t.quality_level
     << " fast_threshold=" << t.fast_threshold << " klt_window_px=" << t.klt_window_px
     << " klt_pyramid_levels=" << t.klt_pyramid_levels << " fb_threshold_px=" << t.fb_threshold_px
-    << " ransac_threshold_px=" << t.ransac_threshold_px << "\n"
+    << " ransac_threshold_px=" << t.ransac_threshold_px << " redetect_fraction=" << t.redetect_fraction << "\n"
     << "  camera: time_offset " << n.camera_time_offset_s << " [s], calibration_file='" << n.camera_calibration_file
     << "', extrinsic_source=" << n.extrinsic_source << "\n"
     << "  sync: max_image_queue=" << n.max_image_queue << " time_jump_reset_s=" << n.time_jump_reset_s

@@ -1,6 +1,7 @@
 // The visual front end on synthetic images whose true motion is known: KLT seeded by the gyro's
 // rotation follows a rotation-only homography to a fraction of a pixel, corners respect the grid
-// quota, spacing, border and the quality floor relative to the best corner, and bad images
+// quota, spacing, border and the quality floor relative to the best corner, the search waits
+// for redetect_fraction, and bad images
 // (another size, no texture) reset or starve the tracker without crashing.
 #include <gtest/gtest.h>
 
@@ -165,6 +166,67 @@ TEST(FeatureTracker, WeakTextureBelowTheQualityFloorGetsNoCorners) {
   for (const auto& feat : permissive.track(0.0, img, std::nullopt).features)
     outside += feat.uv.x() > reach || feat.uv.y() > reach;
   EXPECT_GT(outside, 30);
+}
+
+/// The image moved dx px to the left (reflected at the right edge), as a pan would.
+cv::Mat shiftedLeft(const cv::Mat& img, double dx) {
+  const cv::Matx23d A(1.0, 0.0, -dx, 0.0, 1.0, 0.0);
+  cv::Mat out;
+  cv::warpAffine(img, out, A, img.size(), cv::INTER_LINEAR, cv::BORDER_REFLECT);
+  return out;
+}
+
+/// The smallest integer shift that pushes between `lost_min` and `lost_max` corners out over the
+/// left border, with every corner at least 1 px from that border afterwards (so KLT's sub-pixel
+/// noise cannot decide); 0 if there is none.
+int shiftLosing(const CameraFrame& f, int border_px, size_t lost_min, size_t lost_max) {
+  for (int dx = 1; dx < 200; ++dx) {
+    size_t lost = 0;
+    bool clear = true;
+    for (const auto& feat : f.features) {
+      const double x = feat.uv.x() - dx;
+      lost += x < border_px;
+      clear = clear && std::abs(x - border_px) > 1.0;
+    }
+    if (clear && lost >= lost_min && lost <= lost_max) return dx;
+  }
+  return 0;
+}
+
+TEST(FeatureTracker, RedetectFractionDefersTheSearchUntilEnoughTracksAreLost) {
+  const CameraModel cam = pinhole();
+  TrackerParams p;
+  p.max_tracks = 40;
+  p.redetect_fraction = 0.9;  // search again below 36 tracks
+  const cv::Mat img0 = texture(cam.width(), cam.height(), 200.0, 7);
+  FeatureTracker lazy(cam, p);
+  const CameraFrame f0 = lazy.track(0.0, img0, std::nullopt);
+  ASSERT_EQ(static_cast<int>(f0.features.size()), p.max_tracks);
+  const int dx1 = shiftLosing(f0, p.border_px, 1, 3);
+  ASSERT_GT(dx1, 0);
+
+  // A few tracks leave the image: 37-39 are left, above 36, so nothing is searched.
+  const CameraFrame f1 = lazy.track(0.1, shiftedLeft(img0, dx1), std::nullopt);
+  EXPECT_GE(lazy.stats().lost, 1);
+  EXPECT_EQ(lazy.stats().detected, 0);
+  EXPECT_GE(f1.features.size(), 37u);
+  EXPECT_LT(f1.features.size(), 40u);
+
+  // The default (1.0) searches as soon as one track is missing.
+  TrackerParams e = p;
+  e.redetect_fraction = 1.0;
+  FeatureTracker eager(cam, e);
+  ASSERT_EQ(static_cast<int>(eager.track(0.0, img0, std::nullopt).features.size()), p.max_tracks);
+  EXPECT_EQ(static_cast<int>(eager.track(0.1, shiftedLeft(img0, dx1), std::nullopt).features.size()), p.max_tracks);
+  EXPECT_GE(eager.stats().detected, 1);
+
+  // More tracks leave, down below 36 in total: the search runs and fills up to max_tracks again.
+  const int dx2 = shiftLosing(f1, p.border_px, f1.features.size() - 35, f1.features.size() - 1);
+  ASSERT_GT(dx2, 0);
+  const CameraFrame f2 = lazy.track(0.2, shiftedLeft(img0, dx1 + dx2), std::nullopt);
+  EXPECT_LT(lazy.stats().tracked, 36);
+  EXPECT_GT(lazy.stats().detected, 0);
+  EXPECT_EQ(static_cast<int>(f2.features.size()), p.max_tracks);
 }
 
 TEST(FeatureTracker, ImagesOfAnotherSizeOrWithoutTextureRestartTracking) {
