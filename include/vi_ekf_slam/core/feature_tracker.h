@@ -31,7 +31,7 @@ struct TrackerParams {
   int border_px = 8;                 ///< corners this close to the border are dropped [px]
   /// New corners are searched only once the tracks fall below this fraction of max_tracks
   /// [ratio]; 1 searches in every image that lost a track. The search is most of the tracker's
-  /// time: 0.9 cut tracking by 27-35% on the hallway bags, with 4% fewer tracks (bench/README.md).
+  /// time: 0.9 cut tracking by 27-39% on the hallway bags, with 4% fewer tracks (bench/README.md).
   double redetect_fraction = 1.0;
   /// Empty if usable, otherwise what is wrong.
   std::string validate() const;
