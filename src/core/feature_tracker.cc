@@ -122,9 +122,8 @@ CameraFrame FeatureTracker::track(double timestamp, const cv::Mat& img,
     tracks_.clear();
   }
   // The corner search costs the same whether one track or ten are missing (every cell below
-  // its quota is searched), so it can wait until redetect_fraction of the tracks are left.
-  const double n = static_cast<double>(tracks_.size());
-  if (n < params_.max_tracks && n < params_.redetect_fraction * params_.max_tracks) detect(img);
+  // its quota is searched), so it can wait until redetect_fraction (<= 1) of the tracks are left.
+  if (static_cast<double>(tracks_.size()) < params_.redetect_fraction * params_.max_tracks) detect(img);
   prev_pyramid_ = std::move(pyramid);
   prev_image_ = img;
   CameraFrame f;

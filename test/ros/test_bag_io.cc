@@ -9,42 +9,34 @@
 #include <string>
 
 #include "vi_ekf_slam/ros/bag_io.h"
+#include "vi_ekf_slam/sim/scenarios.h"
 
 namespace vi_ekf_slam::glue {
 namespace {
 
-std::string tempBagPath() {
-  char dir[] = "/tmp/vi_ekf_slam_bag_io_XXXXXX";
-  EXPECT_NE(mkdtemp(dir), nullptr);
-  return std::string(dir) + "/rig.bag";
-}
-
-CameraIntrinsics plumbBob() {
-  CameraIntrinsics in;
-  in.width = 64;
-  in.height = 48;
-  in.fx = 50.0;
-  in.fy = 51.0;
-  in.cx = 31.5;
-  in.cy = 23.5;
-  in.model = DistortionModel::kRadTan;
-  in.distortion = {-0.28, 0.07, 2e-4, 1.8e-5, 0.0};
+/// The simulator's camera, with fy made different from fx so that a swap would show.
+CameraIntrinsics testIntrinsics() {
+  CameraIntrinsics in = sim::paperCamera().intrinsics();
+  in.fy = in.fx + 1.0;
   return in;
 }
 
 TEST(RigBagWriter, StaticTransformIsLatchedAndReadsBack) {
-  const std::string path = tempBagPath();
+  char dir[] = "/tmp/vi_ekf_slam_bag_io_XXXXXX";
+  ASSERT_NE(mkdtemp(dir), nullptr);
+  const std::string path = std::string(dir) + "/rig.bag";
+  const CameraIntrinsics in = testIntrinsics();
   CameraExtrinsics T_b_c;
   T_b_c.R_b_c = Eigen::AngleAxisd(0.3, Vec3(0.2, -1.0, 0.5).normalized()).toRotationMatrix();
   T_b_c.p_b_c = Vec3(0.05, -0.02, 0.11);
   {
-    RigBagWriter writer(path, RigTopics(), CameraModel(plumbBob()), T_b_c, ImuNoiseParams(), 200.0, ros::Time(100.0));
+    RigBagWriter writer(path, RigTopics(), CameraModel(in), T_b_c, ImuNoiseParams(), 200.0, ros::Time(100.0));
     ImuData d;
     d.timestamp = 100.0;
     d.wm = Vec3(0.01, 0.02, 0.03);
     d.am = Vec3(0.0, 0.0, 9.81);
     writer.imu(d);
-    writer.image(100.01, cv::Mat(48, 64, CV_8UC1, cv::Scalar(128)));
+    writer.image(100.01, cv::Mat(in.height, in.width, CV_8UC1, cv::Scalar(128)));
   }
 
   // rosbag play latches a topic only if its recorded connection says so; /tf_static is
@@ -72,11 +64,16 @@ TEST(RigBagWriter, StaticTransformIsLatchedAndReadsBack) {
   EXPECT_LT((info.T_b_c->R_b_c - T_b_c.R_b_c).norm(), 1e-9);
   EXPECT_LT((info.T_b_c->p_b_c - T_b_c.p_b_c).norm(), 1e-12);
   ASSERT_TRUE(info.camera.has_value());
-  EXPECT_EQ(info.camera->width, 64);
-  EXPECT_DOUBLE_EQ(info.camera->fy, 51.0);
-  EXPECT_EQ(info.camera->distortion, plumbBob().distortion);
+  EXPECT_EQ(info.camera->width, in.width);
+  EXPECT_EQ(info.camera->height, in.height);
+  EXPECT_DOUBLE_EQ(info.camera->fx, in.fx);
+  EXPECT_DOUBLE_EQ(info.camera->fy, in.fy);
+  EXPECT_DOUBLE_EQ(info.camera->cx, in.cx);
+  EXPECT_DOUBLE_EQ(info.camera->cy, in.cy);
+  EXPECT_EQ(info.camera->distortion, in.distortion);
   EXPECT_DOUBLE_EQ(info.start, 100.0);
   std::remove(path.c_str());
+  rmdir(dir);
 }
 
 }  // namespace
