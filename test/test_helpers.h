@@ -50,6 +50,7 @@ inline FilterState randomState(Mechanization m, int N, std::mt19937_64& rng) {
   s.x.b_a = randomVec(rng, 0.1);
   s.x.b_g = randomVec(rng, 0.01);
   s.x.q_s_b = expQuat(randomVec(rng, 0.4));
+  s.x.t_d = randomVec(rng, 0.05).x();
   if (isSensorCentric(m)) {
     s.x.p_n_s = randomVec(rng, 3.0);
     s.x.q_n_s = randomQuat(rng);

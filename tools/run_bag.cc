@@ -2,15 +2,24 @@
 // as the CPU allows and deterministically (messages in bag order, no threads, no master), and
 // evaluates the result against the bag's ground truth.
 //
-//   vi_ekf_slam_run_bag bag:=FILE [out:=DIR] [config:=YAML] [mechanization:=NAME|all] [plots:=false] [NAME:=VALUE ...]
+//   vi_ekf_slam_run_bag bag:=FILE [out:=DIR] [config:=YAML] [mechanization:=NAME|all] [plots:=false]
+//                       [reference:=FILE.tum [reference_alignment:=sim3|se3|posyaw]
+//                        [reference_frame:=body|camera] [reference_clock:=imu|camera]] [NAME:=VALUE ...]
 //   vi_ekf_slam_run_bag bag:=FILE recorded:=NAME=REC.bag[,NAME=REC.bag...] [out:=DIR]
 // The second form evaluates recordings of live replays (odom, status, landmarks of the node)
 // against the same input bag, with the same metrics.
 //
-// Writes to out (default results/run_bag/<bag name>): <run>.tum (trajectory with the 6x6 pose
-// covariance), summary.json, summary.md, <run>_timeseries.csv, and the plots of tools/plot_run.py
-// (topview.png, errors.png, nees.png; plots:=false to skip them).
+// What needs no ground truth is always reported (health.json, health.md, <run>_trace.csv): path
+// length, speed, tracks, accepted/rejected observations, NIS per dof, time offset, resets, time
+// per image. reference:= compares with any TUM trajectory (evo-style alignment; the reference's
+// poses are of the IMU (body) or of the camera, stamped on the IMU or on the camera clock).
+// With ground truth in the bag: <run>_timeseries.csv, summary.json, summary.md (ATE, NEES, ...).
+// Writes to out (default results/run_bag/<bag name>) with <run>.tum and the plots of
+// tools/plot_run.py (plots:=false to skip them).
+#include <algorithm>
 #include <chrono>
+#include <iomanip>
+#include <optional>
 #include <filesystem>
 #include <fstream>
 #include <iostream>
@@ -20,10 +29,12 @@
 #include <tf2/buffer_core.h>
 #include <tf2_eigen/tf2_eigen.h>
 #include <tf2_msgs/TFMessage.h>
+#include <nlohmann/json.hpp>
 #include <sensor_msgs/point_cloud2_iterator.h>
 #include <sstream>
 
 #include "vi_ekf_slam/core/frames.h"
+#include "vi_ekf_slam/eval/reference_comparison.h"
 #include "vi_ekf_slam/eval/run_evaluation.h"
 #include "vi_ekf_slam/eval/tum_io.h"
 #include "vi_ekf_slam/ros/bag_io.h"
@@ -67,8 +78,15 @@ class RecordingSink : public glue::OutputSink {
       poses.back().tracker_ms = s.tracker_time_ms;
     }
     tracks.push_back(s.tracks);
+    if (!poses.empty()) trace.push_back({poses.back().t, poses.back().p, s});
   }
   std::vector<int> tracks;
+  struct TraceRow {
+    double t;  ///< [s] IMU clock
+    Vec3 p;    ///< [m] body position in the output frame
+    vi_ekf_slam::FilterStatus status;
+  };
+  std::vector<TraceRow> trace;  ///< every processed image, across resets
   void event(const std::string& text) override {
     events.push_back(text);
     if (text.rfind("reset", 0) == 0) {
@@ -80,6 +98,128 @@ class RecordingSink : public glue::OutputSink {
 };
 
 }  // namespace
+
+/// What a run says about itself without ground truth.
+nlohmann::json healthOf(const RecordingSink& sink, double bag_s, double wall_s) {
+  nlohmann::json h;
+  const auto& tr = sink.trace;
+  double path = 0.0, tracks = 0.0, accepted = 0.0, rejected = 0.0, nis = 0.0, ms = 0.0, tracker_ms = 0.0;
+  int nis_n = 0, min_tracks = tr.empty() ? 0 : 1 << 30;
+  std::vector<double> speeds;
+  for (size_t i = 0; i < tr.size(); ++i) {
+    const auto& s = tr[i].status;
+    tracks += s.tracks;
+    min_tracks = std::min(min_tracks, s.tracks);
+    accepted += s.accepted_observations;
+    rejected += s.rejected_observations;
+    ms += s.update_time_ms;
+    tracker_ms += s.tracker_time_ms;
+    if (s.accepted_observations > 0) {
+      nis += s.nis_per_dof;
+      ++nis_n;
+    }
+    if (i > 0 && tr[i - 1].status.resets == s.resets && tr[i].t > tr[i - 1].t) {
+      const double d = (tr[i].p - tr[i - 1].p).norm();
+      path += d;
+      speeds.push_back(d / (tr[i].t - tr[i - 1].t));
+    }
+  }
+  const double n = std::max<double>(1.0, static_cast<double>(tr.size()));
+  std::sort(speeds.begin(), speeds.end());
+  h["images"] = tr.size();
+  h["resets"] = sink.resets;
+  h["path_length_m"] = path;
+  h["speed_p99_mps"] = speeds.empty() ? 0.0 : speeds[static_cast<size_t>(0.99 * (speeds.size() - 1))];
+  h["tracks_mean"] = tracks / n;
+  h["tracks_min"] = min_tracks;
+  h["accepted_per_image"] = accepted / n;
+  h["rejected_per_image"] = rejected / n;
+  h["rejected_fraction"] = accepted + rejected > 0 ? rejected / (accepted + rejected) : 0.0;
+  h["nis_per_dof_mean"] = nis_n ? nis / nis_n : 0.0;
+  h["time_offset_s"] = tr.empty() ? 0.0 : tr.back().status.time_offset_s;
+  h["time_offset_sigma_s"] = tr.empty() ? 0.0 : tr.back().status.time_offset_sigma_s;
+  h["processing_ms_mean"] = ms / n;
+  h["tracker_ms_mean"] = tracker_ms / n;
+  h["reading_ms_mean"] = tr.empty() ? 0.0 : std::max(0.0, 1000.0 * wall_s / n - ms / n);
+  h["real_time_factor"] = wall_s > 0.0 ? bag_s / wall_s : 0.0;  // offline: bag reading included
+  return h;
+}
+
+void printHealth(const std::string& name, const nlohmann::json& h) {
+  std::printf(
+      "%s: %d images, %d resets, path %.2f m (speed p99 %.2f m/s), tracks per image %.1f (min %d), observations "
+      "per image %.1f accepted / %.1f rejected, NIS per dof %.2f, time offset %.4f +- %.4f s\n"
+      "  per image: %.2f ms processing, of which %.2f ms tracking; bag reading and the rest %.2f ms (%.1fx real "
+      "time)\n",
+      name.c_str(), h["images"].get<int>(), h["resets"].get<int>(), h["path_length_m"].get<double>(),
+      h["speed_p99_mps"].get<double>(), h["tracks_mean"].get<double>(), h["tracks_min"].get<int>(),
+      h["accepted_per_image"].get<double>(), h["rejected_per_image"].get<double>(), h["nis_per_dof_mean"].get<double>(),
+      h["time_offset_s"].get<double>(), h["time_offset_sigma_s"].get<double>(), h["processing_ms_mean"].get<double>(),
+      h["tracker_ms_mean"].get<double>(), h["reading_ms_mean"].get<double>(), h["real_time_factor"].get<double>());
+}
+
+std::string healthTable(const nlohmann::json& health) {
+  std::ostringstream md;
+  md << "| run | images | resets | path [m] | speed p99 [m/s] | tracks | accepted | rejected | NIS/dof | time "
+        "offset [s] | ms/image | real-time factor | ref. RMSE [m] | ref. scale | ref. rot [deg] |\n"
+        "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|\n"
+     << std::fixed;
+  for (const auto& [name, h] : health.items()) {
+    if (name == "config") continue;
+    md << "| " << name << " | " << h["images"].get<int>() << " | " << h["resets"].get<int>() << " | "
+       << std::setprecision(2) << h["path_length_m"].get<double>() << " | " << h["speed_p99_mps"].get<double>() << " | "
+       << std::setprecision(1) << h["tracks_mean"].get<double>() << " | " << h["accepted_per_image"].get<double>()
+       << " | " << h["rejected_per_image"].get<double>() << " | " << std::setprecision(2)
+       << h["nis_per_dof_mean"].get<double>() << " | " << std::setprecision(4) << h["time_offset_s"].get<double>()
+       << " | " << std::setprecision(1) << h["processing_ms_mean"].get<double>() << " | "
+       << h["real_time_factor"].get<double>() << " | ";
+    if (h.contains("reference") && h["reference"].contains("position_rmse_m")) {
+      const auto& r = h["reference"];
+      md << std::setprecision(3) << r["position_rmse_m"].get<double>() << " | "
+         << r["scale_reference_units_per_m"].get<double>() << " | " << std::setprecision(2)
+         << r["rotation_rmse_deg"].get<double>() << " |\n";
+    } else {
+      md << "- | - | - |\n";
+    }
+  }
+  return md.str();
+}
+
+void writeTrace(const std::string& path, const RecordingSink& sink) {
+  std::ofstream f(path);
+  f << "t,x,y,z,tracks,accepted,rejected,nis_per_dof,time_offset_s,time_offset_sigma_s,resets,processing_ms,"
+       "tracker_ms\n"
+    << std::setprecision(12);
+  for (const auto& r : sink.trace) {
+    const auto& s = r.status;
+    f << r.t << "," << r.p.x() << "," << r.p.y() << "," << r.p.z() << "," << s.tracks << "," << s.accepted_observations
+      << "," << s.rejected_observations << "," << s.nis_per_dof << "," << s.time_offset_s << ","
+      << s.time_offset_sigma_s << "," << s.resets << "," << s.update_time_ms << "," << s.tracker_time_ms << "\n";
+  }
+}
+
+/// The estimate as the reference sees it: the camera's poses (through the bag's extrinsic) or the
+/// body's, stamped on the IMU clock or on the camera clock (minus the estimated time offset).
+std::vector<eval::StampedPose> referenceView(const RecordingSink& sink, const glue::InputBagInfo& info,
+                                             const std::string& frame, const std::string& clock) {
+  if (frame == "camera" && !info.T_b_c) throw std::runtime_error("the bag has no camera-IMU extrinsic");
+  std::map<double, double> offset_at;
+  for (const auto& r : sink.trace) offset_at[r.t] = r.status.time_offset_s;
+  std::vector<eval::StampedPose> out;
+  for (const auto& p : sink.poses) {
+    eval::StampedPose s{p.t, p.p, p.q, std::nullopt};
+    if (frame == "camera") {
+      s.p = p.p + p.q * info.T_b_c->p_b_c;
+      s.q = p.q * Quat(info.T_b_c->R_b_c);
+    }
+    if (clock == "camera") {
+      const auto it = offset_at.find(p.t);
+      s.t = p.t - (it != offset_at.end() ? it->second : 0.0);
+    }
+    out.push_back(s);
+  }
+  return out;
+}
 
 /// Evaluates a recording of the node's outputs (/vi_ekf_slam/odom, status, landmarks).
 eval::RunMetrics evaluateRecording(const std::string& path, const glue::InputBagInfo& info, double* mean_tracks) {
@@ -142,6 +282,26 @@ int main(int argc, char** argv) {
   else
     mechanizations = {mech};
 
+  std::optional<std::vector<eval::StampedPose>> reference;
+  const std::string ref_frame = args.count("reference_frame") ? args["reference_frame"] : "body";
+  const std::string ref_clock = args.count("reference_clock") ? args["reference_clock"] : "imu";
+  const auto ref_alignment =
+      eval::alignmentFromString(args.count("reference_alignment") ? args["reference_alignment"] : "sim3");
+  if (!ref_alignment || (ref_frame != "body" && ref_frame != "camera") ||
+      (ref_clock != "imu" && ref_clock != "camera")) {
+    std::cerr << "reference_alignment:= sim3|se3|posyaw, reference_frame:= body|camera, reference_clock:= imu|camera\n";
+    return 2;
+  }
+  if (args.count("reference")) {
+    try {
+      reference = eval::readTum(args["reference"]);
+    } catch (const std::exception& e) {
+      std::cerr << "error: " << e.what() << "\n";
+      return 1;
+    }
+  }
+  nlohmann::json health;
+
   glue::InputBagInfo info;
   try {
     info = glue::readInputBag(bag_path);
@@ -181,7 +341,9 @@ int main(int argc, char** argv) {
       }
     }();
     for (const auto& [k, v] : args) {
-      if (k != "bag" && k != "out" && k != "config" && k != "mechanization" && k != "plots") yaml.set(k, v);
+      if (k != "bag" && k != "out" && k != "config" && k != "mechanization" && k != "plots" &&
+          k.rfind("reference", 0) != 0)
+        yaml.set(k, v);
     }
     if (!m.empty()) yaml.set("mechanization", m);
     glue::NodeParams params;
@@ -212,39 +374,79 @@ int main(int argc, char** argv) {
       }
     }
     const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - tic).count();
-    std::vector<eval::EstimatedLandmark> lms;
-    for (const auto& [id, l] : sink.map) lms.push_back(l);
-    eval::RunMetrics metrics = eval::evaluateRun(sink.poses, info.truth, lms, glue::landmarkTruthFromWorld(info));
+    const double bag_s = info.end - info.start;
     fs::create_directories(out);
     std::vector<eval::StampedPose> traj;
     for (const auto& p : sink.poses) traj.push_back({p.t, p.p, p.q, p.cov});
-    eval::writeTum(out + "/" + name + ".tum", traj, "t x y z qx qy qz qw (body in the filter's world frame)");
-    const double bag_s = info.end - info.start;
-    double mean_tracks = 0.0;
-    int min_tracks = sink.tracks.empty() ? 0 : 1 << 30;
-    for (int t : sink.tracks) {
-      mean_tracks += static_cast<double>(t) / sink.tracks.size();
-      min_tracks = std::min(min_tracks, t);
+    eval::writeTum(out + "/" + name + ".tum", traj,
+                   "t x y z qx qy qz qw (body in the filter's world frame, IMU clock)");
+    health[name] = healthOf(sink, bag_s, wall);
+    writeTrace(out + "/" + name + "_trace.csv", sink);
+    printHealth(name, health[name]);
+    if (reference) {
+      try {
+        const eval::ReferenceComparison c =
+            eval::compareWithReference(referenceView(sink, info, ref_frame, ref_clock), *reference, *ref_alignment);
+        health[name]["reference"] = {{"file", args["reference"]},
+                                     {"alignment", eval::toString(c.alignment)},
+                                     {"frame", ref_frame},
+                                     {"clock", ref_clock},
+                                     {"matched", c.matched},
+                                     {"position_rmse_m", c.position_rmse_m},
+                                     {"rotation_rmse_deg", c.rotation_rmse_deg},
+                                     {"scale_reference_units_per_m", c.scale},
+                                     {"estimate_path_m", c.estimate_path_m},
+                                     {"reference_path_m", c.reference_path_m}};
+        std::printf(
+            "  against %s (%s, %s poses, %s clock): %d matched, position RMSE %.3f m, rotation RMSE %.2f deg, "
+            "scale %.3f reference units per metre, path %.2f m (reference %.2f m)\n",
+            args["reference"].c_str(), eval::toString(c.alignment).c_str(), ref_frame.c_str(), ref_clock.c_str(),
+            c.matched, c.position_rmse_m, c.rotation_rmse_deg, c.scale, c.estimate_path_m, c.reference_path_m);
+        std::ofstream rc(out + "/" + name + "_reference.csv");
+        rc << "t,ex,ey,ez,rx,ry,rz\n" << std::setprecision(12);
+        for (size_t i = 0; i < c.t.size(); ++i) {
+          rc << c.t[i] << "," << c.estimate[i].x() << "," << c.estimate[i].y() << "," << c.estimate[i].z() << ","
+             << c.reference[i].x() << "," << c.reference[i].y() << "," << c.reference[i].z() << "\n";
+        }
+      } catch (const std::exception& e) {
+        std::printf("  against %s: not comparable: %s\n", args["reference"].c_str(), e.what());
+        health[name]["reference"] = {{"file", args["reference"]}, {"error", e.what()}};
+      }
     }
-    std::printf(
-        "%s: %zu poses, %d resets, tracks per frame %.1f (min %d), %.1f s of data in %.1f s (%.1fx real time), "
-        "ATE %.3f m, final %.3f m (%.2f%%)\n"
-        "  per image: %.2f ms processing, of which %.2f ms tracking; bag reading and the rest %.2f ms\n",
-        name.c_str(), sink.poses.size(), sink.resets, mean_tracks, min_tracks, bag_s, wall, bag_s / wall,
-        metrics.ate_position_m, metrics.final_position_error_m, metrics.final_position_error_pct,
-        metrics.processing_ms_mean, metrics.tracker_ms_mean,
-        sink.poses.empty() ? 0.0 : 1000.0 * wall / sink.poses.size() - metrics.processing_ms_mean);
+    if (info.truth.empty()) continue;
+    std::vector<eval::EstimatedLandmark> lms;
+    for (const auto& [id, l] : sink.map) lms.push_back(l);
+    eval::RunMetrics metrics = eval::evaluateRun(sink.poses, info.truth, lms, glue::landmarkTruthFromWorld(info));
+    std::printf("  against the bag's ground truth: ATE %.3f m, final %.3f m (%.2f%%)\n", metrics.ate_position_m,
+                metrics.final_position_error_m, metrics.final_position_error_pct);
     metrics.real_time_factor = bag_s / wall;  // offline: the whole pipeline, bag reading included
     results.emplace_back(name, metrics);
   }
-  std::ostringstream cfg;
-  cfg << "{\"bag\": \"" << bag_path << "\", \"config\": \"" << config << "\", \"mode\": \""
-      << (args.count("recorded") ? "live replay" : "offline") << "\"}";
-  eval::writeRunReport(out, results, cfg.str());
-  std::ifstream md(out + "/summary.md");
-  std::cout << "\n" << md.rdbuf() << "\nwritten to " << out << "\n";
+  {
+    health["config"] = {
+        {"bag", bag_path}, {"config", config}, {"mode", args.count("recorded") ? "live replay" : "offline"}};
+    std::ofstream hj(out + "/health.json");
+    hj << health.dump(2) << "\n";
+    std::ofstream hm(out + "/health.md");
+    hm << healthTable(health);
+    std::cout << "\n" << healthTable(health);
+  }
+  if (!results.empty()) {
+    std::ostringstream cfg;
+    cfg << "{\"bag\": \"" << bag_path << "\", \"config\": \"" << config << "\", \"mode\": \""
+        << (args.count("recorded") ? "live replay" : "offline") << "\"}";
+    eval::writeRunReport(out, results, cfg.str());
+    std::ifstream md(out + "/summary.md");
+    std::cout << "\nagainst the bag's ground truth:\n" << md.rdbuf();
+  } else {
+    fs::remove(out + "/summary.json");  // a stale one from an earlier run with ground truth
+    std::cout << "\nthe bag has no ground truth (" << glue::RigTopics().ground_truth
+              << "): no ATE or NEES; use reference:=FILE.tum to compare with a trajectory\n";
+  }
+  std::cout << "written to " << out << "\n";
   if (!args.count("plots") || args["plots"] != "false") {
-    // The study's plots (top view, errors with 3-sigma, NEES) with Debian's Python (matplotlib).
+    // Top view, speed, NIS, time offset and tracks over time (and, with ground truth, errors with
+    // 3-sigma and NEES) with Debian's Python (matplotlib).
     const std::string cmd =
         "/usr/bin/python3 '" + std::string(VI_EKF_SLAM_SOURCE_DIR) + "/tools/plot_run.py' '" + out + "'";
     if (std::system(cmd.c_str()) != 0) std::cerr << "warning: plotting failed: " << cmd << "\n";

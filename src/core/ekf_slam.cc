@@ -50,6 +50,7 @@ void EkfSlam::initialize(const NavState& init) {
   s.x.q_s_b = init.q_n_b.normalized();
   s.x.b_a = init.b_a;
   s.x.b_g = init.b_g;
+  s.x.t_d = config_.camera_time_offset_s;
   Eigen::MatrixXd P = Eigen::MatrixXd::Zero(kWorldCentricDim, kWorldCentricDim);
   P.block<3, 3>(kP, kP).diagonal().setConstant(u.position_m * u.position_m);
   P.block<3, 3>(kV, kV).diagonal().setConstant(u.velocity_mps * u.velocity_mps);
@@ -57,6 +58,7 @@ void EkfSlam::initialize(const NavState& init) {
   P.block<3, 3>(kPsi, kPsi).diagonal() << u.roll_pitch_rad * u.roll_pitch_rad, u.roll_pitch_rad * u.roll_pitch_rad,
       u.yaw_rad * u.yaw_rad;
   P.block<3, 3>(kBg, kBg).diagonal().setConstant(u.gyro_bias_radps * u.gyro_bias_radps);
+  P(kTd, kTd) = u.time_offset_s * u.time_offset_s;
   s.setCovariance(P);
   // Sensor-centric: {s} := initial body frame; the pose in {s} is exact and the registration
   // uncertainty moves to p_n_s, q_n_s (the same frame change as a mechanization switch).
@@ -96,7 +98,9 @@ bool EkfSlam::propagateTo(double t) {
   if (!initialized_ || !std::isfinite(t) || t < state_.timestamp) return false;
   if (imu_.empty() || imu_.back().timestamp < t) return false;
   auto integrate = [&](double t0, double t1, const Vec3& wm, const Vec3& am) {
-    if (t1 > t0) propagateState(state_, wm, am, t1 - t0, config_.imu_noise, g_n_);
+    if (t1 <= t0) return;
+    propagateState(state_, wm, am, t1 - t0, config_.imu_noise, g_n_);
+    last_gyro_ = wm;
   };
   // Before the first buffered sample: hold it.
   if (state_.timestamp < imu_.front().timestamp) {
@@ -181,12 +185,15 @@ bool EkfSlam::shouldCompose(int new_landmarks) const {
   return false;
 }
 
-FrameResult EkfSlam::processFrame(const CameraFrame& frame) {
+FrameResult EkfSlam::processFrame(const CameraFrame& camera_frame) {
   FrameResult r;
   if (!initialized_) {
     r.error = "filter not initialized";
     return r;
   }
+  // The frame on the IMU clock: its stamp plus the current time offset estimate.
+  CameraFrame frame = camera_frame;
+  frame.timestamp = imuTime(camera_frame.timestamp);
   if (!std::isfinite(frame.timestamp) || frame.timestamp < state_.timestamp) {
     r.error = "frame older than the filter state";
     return r;
@@ -229,7 +236,7 @@ FrameResult EkfSlam::processFrame(const CameraFrame& frame) {
     r.deferred_features = static_cast<int>(fresh.size());
     fresh.clear();  // their tracks go on and become landmarks once the rig is seen moving
   }
-  r.update = ekfUpdate(state_, known, camera_, T_b_c_, config_.update);
+  r.update = ekfUpdate(state_, known, camera_, T_b_c_, config_.update, last_gyro_ - state_.x.b_g);
   for (const auto& f : known) last_seen_[f.id] = frame.timestamp;
 
   // Map management: drop landmarks not seen for landmark_timeout_s, then make room for the new

@@ -73,6 +73,12 @@ std::string EkfSlamConfig::validate() const {
   requireNonNegative(err, "initial.yaw_rad [rad]", initial.yaw_rad);
   requirePositive(err, "initial.accel_bias_mps2 [m/s^2]", initial.accel_bias_mps2);
   requirePositive(err, "initial.gyro_bias_radps [rad/s]", initial.gyro_bias_radps);
+  if (!std::isfinite(camera_time_offset_s) || std::abs(camera_time_offset_s) > 1.0) {
+    err << "camera_time_offset_s [s] must be within [-1, 1] (got " << camera_time_offset_s << ")\n";
+  }
+  if (!std::isfinite(initial.time_offset_s) || initial.time_offset_s < 0.0 || initial.time_offset_s > 0.5) {
+    err << "initial.time_offset_s [s] must be within [0, 0.5] (got " << initial.time_offset_s << ")\n";
+  }
   requirePositive(err, "zero_velocity.window_s [s]", zero_velocity.window_s);
   requirePositive(err, "zero_velocity.still_window_s [s]", zero_velocity.still_window_s);
   requirePositive(err, "zero_velocity.still_accel_std_mps2 [m/s^2]", zero_velocity.still_accel_std_mps2);

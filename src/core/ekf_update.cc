@@ -13,12 +13,14 @@ struct AcceptedObservation {
   std::int64_t id;
   int col;  ///< landmark column in the error state
   ObservationJacobians J;
+  Eigen::Vector2d H_td;  ///< w.r.t. the time offset: the feature's image velocity [px/s]
   Eigen::Vector2d residual;
 };
 }  // namespace
 
 UpdateResult ekfUpdate(FilterState& state, const std::vector<FeatureObservation>& observations,
-                       const CameraModel& camera, const CameraExtrinsics& T_b_c, const UpdateParams& params) {
+                       const CameraModel& camera, const CameraExtrinsics& T_b_c, const UpdateParams& params,
+                       const Vec3& omega_b) {
   UpdateResult result;
   const double r_var = params.pixel_noise_px * params.pixel_noise_px;
   const double gate = chiSquaredQuantile(params.gate_probability, 2.0);
@@ -42,7 +44,14 @@ UpdateResult ekfUpdate(FilterState& state, const std::vector<FeatureObservation>
     const Eigen::Matrix<double, 9, 9> Psub = gatherBlocks<3>(P0, blocks);
     Eigen::Matrix<double, 2, 9> Hsub;
     Hsub << a.J.H_p, a.J.H_psi, a.J.H_l;
-    const Eigen::Matrix2d S = Hsub * Psub * Hsub.transpose() + r_var * Eigen::Matrix2d::Identity();
+    // The pixel z seen at image time t_i belongs to the state at t_i + t_d; the filter is at
+    // t_i + t_d_est, so z = h(x) + velocity * (t_d - t_d_est).
+    if (!predictImageVelocity(state.x, state.landmark(*li), camera, T_b_c, omega_b, &a.H_td)) a.H_td.setZero();
+    Eigen::Matrix<double, 1, 9> P_td;  // cross-covariance of t_d with the blocks above
+    P_td << P0.block<1, 3>(idx::kTd, idx::kP), P0.block<1, 3>(idx::kTd, idx::kPsi), P0.block<1, 3>(idx::kTd, a.col);
+    const Eigen::Vector2d HP_td = Hsub * P_td.transpose();
+    Eigen::Matrix2d S = Hsub * Psub * Hsub.transpose() + r_var * Eigen::Matrix2d::Identity();
+    S += a.H_td * P0(idx::kTd, idx::kTd) * a.H_td.transpose() + HP_td * a.H_td.transpose() + a.H_td * HP_td.transpose();
     const double d2 = a.residual.dot(S.ldlt().solve(a.residual));
     if (!std::isfinite(d2) || d2 > gate) {
       result.rejected_ids.push_back(obs.id);
@@ -65,6 +74,7 @@ UpdateResult ekfUpdate(FilterState& state, const std::vector<FeatureObservation>
     PHt.middleCols<2>(2 * j).noalias() = P.middleCols<3>(idx::kP) * a.J.H_p.transpose();
     PHt.middleCols<2>(2 * j).noalias() += P.middleCols<3>(idx::kPsi) * a.J.H_psi.transpose();
     PHt.middleCols<2>(2 * j).noalias() += P.middleCols<3>(a.col) * a.J.H_l.transpose();
+    PHt.middleCols<2>(2 * j).noalias() += P.col(idx::kTd) * a.H_td.transpose();
     r.segment<2>(2 * j) = a.residual;
   }
   Eigen::MatrixXd S(m, m);
@@ -73,6 +83,7 @@ UpdateResult ekfUpdate(FilterState& state, const std::vector<FeatureObservation>
     S.middleRows<2>(2 * i).noalias() = a.J.H_p * PHt.middleRows<3>(idx::kP);
     S.middleRows<2>(2 * i).noalias() += a.J.H_psi * PHt.middleRows<3>(idx::kPsi);
     S.middleRows<2>(2 * i).noalias() += a.J.H_l * PHt.middleRows<3>(a.col);
+    S.middleRows<2>(2 * i).noalias() += a.H_td * PHt.row(idx::kTd);
   }
   S.diagonal().array() += r_var;
   symmetrize(S);

@@ -181,6 +181,7 @@ void FilterState::boxplus(const Eigen::VectorXd& dx) {
   x.b_a += dx.segment<3>(idx::kBa);
   x.q_s_b = (expQuat(dx.segment<3>(idx::kPsi)) * x.q_s_b).normalized();
   x.b_g += dx.segment<3>(idx::kBg);
+  x.t_d += dx(idx::kTd);
   if (isSensorCentric(mechanization_)) {
     x.p_n_s += dx.segment<3>(idx::kPns);
     x.q_n_s = (expQuat(dx.segment<3>(idx::kPsiNs)) * x.q_n_s).normalized();
@@ -198,6 +199,7 @@ Eigen::VectorXd FilterState::boxminus(const FilterState& other) const {
   e.segment<3>(idx::kBa) = x.b_a - other.x.b_a;
   e.segment<3>(idx::kPsi) = rotationError(x.q_s_b, other.x.q_s_b);
   e.segment<3>(idx::kBg) = x.b_g - other.x.b_g;
+  e(idx::kTd) = x.t_d - other.x.t_d;
   if (isSensorCentric(mechanization_)) {
     e.segment<3>(idx::kPns) = x.p_n_s - other.x.p_n_s;
     e.segment<3>(idx::kPsiNs) = rotationError(x.q_n_s, other.x.q_n_s);

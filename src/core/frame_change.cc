@@ -113,6 +113,7 @@ FrameChangeJacobian compositionJacobian(const FilterState& s) {
   J.J_motion.block<3, 3>(kV, kPsi) = R.transpose() * skew(s.x.v_s_b);
   J.J_motion.block<3, 3>(kBa, kBa).setIdentity();
   J.J_motion.block<3, 3>(kBg, kBg).setIdentity();
+  J.J_motion(kTd, kTd) = 1.0;
   // eq. (32): T_n_s2 = T_n_s T_s_b.
   J.J_motion.block<3, 3>(kPns, kPns).setIdentity();
   J.J_motion.block<3, 3>(kPns, kP) = R_n_s;
@@ -148,6 +149,7 @@ FrameChangeJacobian worldToSensorJacobian(const FilterState& s) {
   J.J_motion.block<3, 3>(kV, kPsi) = R.transpose() * skew(s.x.v_s_b);
   J.J_motion.block<3, 3>(kBa, kBa).setIdentity();
   J.J_motion.block<3, 3>(kBg, kBg).setIdentity();
+  J.J_motion(kTd, kTd) = 1.0;
   J.J_motion.block<3, 3>(kPns, kP).setIdentity();      // p_n_s = p_n_b
   J.J_motion.block<3, 3>(kPsiNs, kPsi).setIdentity();  // q_n_s = q_n_b
   resetToBodyLandmarks(s, R, &J);
@@ -170,6 +172,7 @@ Eigen::MatrixXd sensorToWorldMotionJacobian(const MotionState& x) {
   J.block<3, 3>(kPsi, kPsi) = R_n_s;
   J.block<3, 3>(kPsi, kPsiNs).setIdentity();
   J.block<3, 3>(kBg, kBg).setIdentity();
+  J(kTd, kTd) = 1.0;
   return J;
 }
 
@@ -216,6 +219,7 @@ void switchMechanization(FilterState& s, Mechanization target) {
   }
   x.b_a = s.x.b_a;
   x.b_g = s.x.b_g;
+  x.t_d = s.x.t_d;
   Eigen::MatrixXd Pn = applyFrameChange(s.covariance(), J);
   checkFinite(Pn);
   s.reset(target, x, s.landmarkIds(), std::move(lms), std::move(Pn));

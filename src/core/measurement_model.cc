@@ -38,4 +38,31 @@ bool predictObservation(const MotionState& x, const Landmark& lm, const CameraMo
   return true;
 }
 
+bool predictImageVelocity(const MotionState& x, const Landmark& lm, const CameraModel& camera,
+                          const CameraExtrinsics& T_b_c, const Vec3& omega_b, Eigen::Vector2d* velocity) {
+  const Mat3 R_s_b = x.q_s_b.toRotationMatrix();
+  const Vec3 p_s_c = x.p_s_b + R_s_b * T_b_c.p_b_c;
+  const Mat3 R_c_s = T_b_c.R_b_c.transpose() * R_s_b.transpose();
+  // q_c = w R_c_s (Y - p_s_c) as in predictObservation (w = rho for inverse depth, else 1).
+  Vec3 q_s;
+  double w = 1.0;
+  if (lm.kind == LandmarkKind::kCartesian) {
+    q_s = lm.l - p_s_c;
+  } else {
+    w = lm.l.z();
+    q_s = w * (lm.p_s_a - p_s_c) + lm.R_s_a * Vec3(lm.l.x(), lm.l.y(), 1.0);
+  }
+  const Vec3 q_c = R_c_s * q_s;
+  Eigen::Vector2d uv;
+  Eigen::Matrix<double, 2, 3> J_pi;
+  if (!camera.project(q_c, &uv, &J_pi)) return false;
+  // The camera turns with omega_c = R_c_b omega_b (dR_c_s/dt = -[omega_c]x R_c_s) and moves with
+  // v_s_c = v_s_b + R_s_b (omega_b x p_b_c).
+  const Vec3 omega_c = T_b_c.R_b_c.transpose() * omega_b;
+  const Vec3 v_s_c = x.v_s_b + R_s_b * omega_b.cross(T_b_c.p_b_c);
+  const Vec3 q_c_dot = -omega_c.cross(q_c) - w * (R_c_s * v_s_c);
+  *velocity = J_pi * q_c_dot;
+  return true;
+}
+
 }  // namespace vi_ekf_slam

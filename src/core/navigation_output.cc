@@ -1,5 +1,8 @@
 #include "vi_ekf_slam/core/navigation_output.h"
 
+#include <algorithm>
+#include <cmath>
+
 #include "vi_ekf_slam/core/frame_change.h"
 #include "vi_ekf_slam/core/matrix_utils.h"
 
@@ -19,11 +22,13 @@ NavState navState(const FilterState& s) {
   out.timestamp = s.timestamp;
   out.b_a = s.x.b_a;
   out.b_g = s.x.b_g;
+  out.t_d = s.x.t_d;
+  out.t_d_sigma = std::sqrt(std::max(0.0, s.motionCovariance()(idx::kTd, idx::kTd)));
   if (!isSensorCentric(s.mechanization())) {
     out.p_n_b = s.x.p_s_b;
     out.v_n_b = s.x.v_s_b;
     out.q_n_b = s.x.q_s_b;
-    out.cov = s.motionCovariance();
+    out.cov = s.motionCovariance().topLeftCorner<idx::kNavDim, idx::kNavDim>();
     return out;
   }
   out.p_n_b = s.x.p_n_s + s.x.q_n_s * s.x.p_s_b;
@@ -31,7 +36,8 @@ NavState navState(const FilterState& s) {
   out.q_n_b = (s.x.q_n_s * s.x.q_s_b).normalized();
   // Only the motion block of the structured Jacobian is needed: O(1) in the map size.
   const Eigen::MatrixXd J = sensorToWorldMotionJacobian(s.x);
-  out.cov = J * s.motionCovariance() * J.transpose();
+  const Eigen::MatrixXd C = J * s.motionCovariance() * J.transpose();
+  out.cov = C.topLeftCorner<idx::kNavDim, idx::kNavDim>();
   out.cov = (0.5 * (out.cov + out.cov.transpose())).eval();
   return out;
 }

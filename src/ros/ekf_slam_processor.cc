@@ -188,7 +188,7 @@ void EkfSlamProcessor::imu(const sensor_msgs::Imu& msg) {
 
 void EkfSlamProcessor::image(const sensor_msgs::Image& msg) {
   ++counters_.images_received;
-  const double t = msg.header.stamp.toSec() + params_.node.camera_time_offset_s;
+  const double t = msg.header.stamp.toSec();  // camera clock; the filter maps it to the IMU clock
   if (t <= last_image_t_) {
     if (last_image_t_ - t > params_.node.time_jump_reset_s) {
       reset("image time jumped back by " + std::to_string(last_image_t_ - t) + " s");
@@ -222,7 +222,7 @@ void EkfSlamProcessor::image(const sensor_msgs::Image& msg) {
     reportProblem("waiting for a static IMU interval to initialize");
     return;
   }
-  if (t < filter_->state().timestamp) {
+  if (filter_->imuTime(t) < filter_->state().timestamp) {
     ++counters_.images_late;
     reportProblem("image older than the filter state dropped (arrived too late)");
     return;
@@ -237,10 +237,11 @@ void EkfSlamProcessor::image(const sensor_msgs::Image& msg) {
 }
 
 void EkfSlamProcessor::processQueue() {
-  while (!queue_.empty() && filter_ && filter_->initialized() && queue_.front().t <= filter_->latestImuTime()) {
+  while (!queue_.empty() && filter_ && filter_->initialized() &&
+         filter_->imuTime(queue_.front().t) <= filter_->latestImuTime()) {
     PendingImage img = std::move(queue_.front());
     queue_.pop_front();
-    if (img.t < filter_->state().timestamp) {
+    if (filter_->imuTime(img.t) < filter_->state().timestamp) {
       ++counters_.images_late;
       continue;
     }
@@ -250,7 +251,7 @@ void EkfSlamProcessor::processQueue() {
 
 void EkfSlamProcessor::processImage(const PendingImage& img) {
   const auto tic = std::chrono::steady_clock::now();
-  if (!filter_->propagateTo(img.t)) {
+  if (!filter_->propagateTo(filter_->imuTime(img.t))) {
     ++counters_.images_late;
     return;
   }
@@ -304,7 +305,11 @@ void EkfSlamProcessor::output(const PendingImage& img, const CameraFrame& frame,
   const NodeOptions& o = params_.node;
   const double w_var =
       params_.filter.imu_noise.gyro_noise_density * params_.filter.imu_noise.gyro_noise_density * 200.0;
-  const nav_msgs::Odometry odom = toOdometry(nav, last_gyro_ - nav.b_g, w_var, img.stamp, o.world_frame, o.body_frame);
+  // Every output is stamped on the IMU clock, at the time of the state it carries (the image
+  // stamp plus the estimated camera-IMU time offset).
+  ros::Time stamp;
+  stamp.fromSec(nav.timestamp);
+  const nav_msgs::Odometry odom = toOdometry(nav, last_gyro_ - nav.b_g, w_var, stamp, o.world_frame, o.body_frame);
   if (!allFinite(odom)) {
     reset("non-finite odometry");
     return;
@@ -328,9 +333,13 @@ void EkfSlamProcessor::output(const PendingImage& img, const CameraFrame& frame,
       }
       out.push_back(lo);
     }
-    sink_.landmarks(out, img.stamp);
+    sink_.landmarks(out, stamp);
   }
-  if (sink_.wantsTracksImage()) sink_.tracksImage(odom.header, tracker_->drawTracks(img.mono));
+  if (sink_.wantsTracksImage()) {
+    std_msgs::Header header = odom.header;
+    header.stamp = img.stamp;  // the image's own stamp, so it overlays its source image
+    sink_.tracksImage(header, tracker_->drawTracks(img.mono));
+  }
   vi_ekf_slam::FilterStatus s;
   s.header = odom.header;
   s.mechanization = toString(filter_->mechanization());
@@ -343,6 +352,9 @@ void EkfSlamProcessor::output(const PendingImage& img, const CameraFrame& frame,
   s.removed_landmarks = static_cast<int>(r.removed_ids.size());
   s.accepted_observations = r.update.accepted;
   s.rejected_observations = static_cast<int>(r.update.rejected_ids.size());
+  s.nis_per_dof = r.update.accepted > 0 ? r.update.nis_sum / (2.0 * r.update.accepted) : 0.0;
+  s.time_offset_s = nav.t_d;
+  s.time_offset_sigma_s = nav.t_d_sigma;
   s.compositions = filter_->compositions();
   s.stationary = r.zero_velocity_applied;
   s.parallax_px = r.stationary.parallax_px;

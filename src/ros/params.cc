@@ -292,6 +292,8 @@ std::string loadParams(const ParamSource& source, NodeParams* out) {
   rd("initial_sigma_yaw_rad", f.initial.yaw_rad);
   rd("initial_sigma_accel_bias_mps2", f.initial.accel_bias_mps2);
   rd("initial_sigma_gyro_bias_radps", f.initial.gyro_bias_radps);
+  rd("camera_time_offset_s", f.camera_time_offset_s);
+  rd("initial_sigma_time_offset_s", f.initial.time_offset_s);
   StaticInitParams& s = p.static_init;
   rd("static_window_s", s.window_s);
   rd("static_max_accel_std_mps2", s.max_accel_std_mps2);
@@ -302,7 +304,6 @@ std::string loadParams(const ParamSource& source, NodeParams* out) {
   rd("body_frame", n.body_frame);
   rd("publish_tf", n.publish_tf);
   rd("tune_allocator", n.tune_allocator);
-  rd("camera_time_offset_s", n.camera_time_offset_s);
   rd("camera_calibration_file", n.camera_calibration_file);
   rd("extrinsic_source", n.extrinsic_source);
   rd("T_b_c", n.T_b_c);
@@ -314,9 +315,6 @@ std::string loadParams(const ParamSource& source, NodeParams* out) {
   err << fromReconfigure(c, &p);
   if (n.world_frame.empty() || n.body_frame.empty()) err << "world_frame and body_frame must not be empty\n";
   if (n.world_frame == n.body_frame) err << "world_frame and body_frame must differ\n";
-  if (!std::isfinite(n.camera_time_offset_s) || std::abs(n.camera_time_offset_s) > 1.0) {
-    err << "camera_time_offset_s must be within [-1, 1] s (got " << n.camera_time_offset_s << ")\n";
-  }
   if (n.extrinsic_source != "tf" && n.extrinsic_source != "parameters") {
     err << "extrinsic_source must be 'tf' or 'parameters' (got '" << n.extrinsic_source << "')\n";
   }
@@ -369,7 +367,8 @@ std::string describeParams(const NodeParams& p) {
     << "  gravity_mps2=" << f.gravity_mps2 << " max_imu_gap_s=" << f.max_imu_gap_s << " [s]\n"
     << "  initial sigmas: position " << f.initial.position_m << " [m], velocity " << f.initial.velocity_mps
     << " [m/s], roll/pitch " << f.initial.roll_pitch_rad << " [rad], yaw " << f.initial.yaw_rad << " [rad], accel bias "
-    << f.initial.accel_bias_mps2 << " [m/s^2], gyro bias " << f.initial.gyro_bias_radps << " [rad/s]\n"
+    << f.initial.accel_bias_mps2 << " [m/s^2], gyro bias " << f.initial.gyro_bias_radps << " [rad/s], time offset "
+    << f.initial.time_offset_s << " [s]\n"
     << "  static init: window " << p.static_init.window_s << " [s], accel std < " << p.static_init.max_accel_std_mps2
     << " [m/s^2], gyro std < " << p.static_init.max_gyro_std_radps << " [rad/s]\n"
     << "  tracker: detector=" << detectorName(t.detector) << " max_tracks=" << t.max_tracks
@@ -377,8 +376,8 @@ std::string describeParams(const NodeParams& p) {
     << " fast_threshold=" << t.fast_threshold << " klt_window_px=" << t.klt_window_px
     << " klt_pyramid_levels=" << t.klt_pyramid_levels << " fb_threshold_px=" << t.fb_threshold_px
     << " ransac_threshold_px=" << t.ransac_threshold_px << " redetect_fraction=" << t.redetect_fraction << "\n"
-    << "  camera: time_offset " << n.camera_time_offset_s << " [s], calibration_file='" << n.camera_calibration_file
-    << "', extrinsic_source=" << n.extrinsic_source << "\n"
+    << "  camera: time_offset " << f.camera_time_offset_s << " [s] (t_imu = t_image + offset), calibration_file='"
+    << n.camera_calibration_file << "', extrinsic_source=" << n.extrinsic_source << "\n"
     << "  sync: max_image_queue=" << n.max_image_queue << " time_jump_reset_s=" << n.time_jump_reset_s
     << " [s] path_max_length=" << n.path_max_length << " max_image_gap_s=" << n.max_image_gap_s << " [s]";
   if (n.extrinsic_source == "parameters" && n.T_b_c.size() == 7) {

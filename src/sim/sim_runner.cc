@@ -1,7 +1,9 @@
 #include "vi_ekf_slam/sim/sim_runner.h"
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <deque>
 
 namespace vi_ekf_slam::sim {
 
@@ -63,25 +65,35 @@ SimRun runSimulation(const Scenario& sc, const EkfSlamConfig& config, const NavS
   const double cam_dt = 1.0 / sc.cam.rate_hz;
   int next_frame = 1;  // the first frame comes one camera period after the start
   auto frameTime = [&](int k) { return initial.timestamp + k * cam_dt; };
+  // Frames wait until the IMU reaches their stamp on the filter's IMU clock, as in the node's queue
+  // (with a camera-IMU time offset the stamp is the true time minus the offset).
+  std::deque<CameraFrame> pending;
   for (size_t k = 0; k < imu.samples.size(); ++k) {
     if (!activeFault(sc.faults, SensorFault::Kind::kImuGap, imu.samples[k].timestamp)) filter.addImu(imu.samples[k]);
     while (frameTime(next_frame) <= imu.samples[k].timestamp + 1e-12 && frameTime(next_frame) <= traj.endTime()) {
       const double t = frameTime(next_frame++);
-      FrameRecord rec;
-      rec.t = t;
-      rec.truth = traj.sample(t);
-      const size_t bias_index = std::min(k, imu.true_accel_bias.size() - 1);
-      rec.true_accel_bias = imu.true_accel_bias[bias_index];
-      rec.true_gyro_bias = imu.true_gyro_bias[bias_index];
-      CameraFrame frame = camera.observe(rec.truth, &rng);
+      CameraFrame frame = camera.observe(traj.sample(t), &rng);
+      frame.timestamp = t - sc.cam.time_offset_s;
       if (activeFault(sc.faults, SensorFault::Kind::kImageDropout, t)) continue;
       if (activeFault(sc.faults, SensorFault::Kind::kCameraCovered, t)) frame.features.clear();
       if (const SensorFault* f = activeFault(sc.faults, SensorFault::Kind::kOutlierBurst, t)) {
         corruptFeatures(frame, f->outlier_fraction, rng);
       }
+      pending.push_back(std::move(frame));
+    }
+    while (!pending.empty() && filter.imuTime(pending.front().timestamp) <= filter.latestImuTime() + 1e-12) {
+      const CameraFrame frame = std::move(pending.front());
+      pending.pop_front();
+      FrameRecord rec;
       const auto tic = std::chrono::steady_clock::now();
       rec.result = filter.processFrame(frame);
       rec.filter_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - tic).count();
+      // The truth at the time of the estimate (the stamp plus the estimated time offset).
+      rec.t = rec.result.processed ? filter.state().timestamp : frame.timestamp + sc.cam.time_offset_s;
+      rec.truth = traj.sample(std::min(rec.t, traj.endTime()));
+      const size_t bias_index = std::min(k, imu.true_accel_bias.size() - 1);
+      rec.true_accel_bias = imu.true_accel_bias[bias_index];
+      rec.true_gyro_bias = imu.true_gyro_bias[bias_index];
       rec.estimate = filter.navState();
       rec.landmarks_in_state = filter.state().numLandmarks();
       if (callback) callback(filter, rec);

@@ -33,6 +33,9 @@ TEST(EkfUpdate, ReducesUncertaintyAlongObservedDirectionsOnly) {
   H.middleCols<3>(idx::kP) = J.H_p;
   H.middleCols<3>(idx::kPsi) = J.H_psi;
   H.middleCols<3>(s.landmarkIndex(0)) = J.H_l;
+  Eigen::Vector2d H_td;  // the time offset's column: the predicted image velocity (omega = 0)
+  ASSERT_TRUE(predictImageVelocity(s.x, s.landmark(0), cam, T, Vec3::Zero(), &H_td));
+  H.col(idx::kTd) = H_td;
   const UpdateResult r = ekfUpdate(s, {{100, uv}}, cam, T, UpdateParams());
   ASSERT_EQ(r.accepted, 1);
   const Eigen::MatrixXd& P1 = s.covariance();

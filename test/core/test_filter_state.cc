@@ -5,13 +5,14 @@
 using namespace vi_ekf_slam;
 
 TEST(FilterState, LayoutFollowsMechanization) {
-  EXPECT_EQ(FilterState(Mechanization::kWorldCentric).dim(), 15);
-  EXPECT_EQ(FilterState(Mechanization::kSensorCentric).dim(), 21);
-  EXPECT_EQ(FilterState(Mechanization::kSensorCentricComposition).dim(), 21);
+  // p v b_a psi b_g t_d (16), plus p_n_s psi_n_s (22) in the sensor-centric layouts.
+  EXPECT_EQ(FilterState(Mechanization::kWorldCentric).dim(), 16);
+  EXPECT_EQ(FilterState(Mechanization::kSensorCentric).dim(), 22);
+  EXPECT_EQ(FilterState(Mechanization::kSensorCentricComposition).dim(), 22);
   std::mt19937_64 rng(22);
   const FilterState s = test::randomState(Mechanization::kSensorCentric, 4, rng);
-  EXPECT_EQ(s.dim(), 21 + 12);
-  EXPECT_EQ(s.landmarkIndex(2), 27);
+  EXPECT_EQ(s.dim(), 22 + 12);
+  EXPECT_EQ(s.landmarkIndex(2), 28);
 }
 
 TEST(FilterState, RemovingLandmarksDeletesTheirRowsAndColumnsOnly) {
@@ -23,9 +24,9 @@ TEST(FilterState, RemovingLandmarksDeletesTheirRowsAndColumnsOnly) {
   ASSERT_EQ(s.numLandmarks(), 3);
   EXPECT_EQ(s.landmarkIds(), (std::vector<std::int64_t>{ids0[0], ids0[2], ids0[4]}));
   std::vector<int> keep;
-  for (int r = 0; r < 15; ++r) keep.push_back(r);
+  for (int r = 0; r < idx::kWorldCentricDim; ++r) keep.push_back(r);
   for (int i : {0, 2, 4})
-    for (int r = 0; r < 3; ++r) keep.push_back(15 + 3 * i + r);
+    for (int r = 0; r < 3; ++r) keep.push_back(idx::kWorldCentricDim + 3 * i + r);
   const Eigen::MatrixXd& P = s.covariance();
   for (size_t i = 0; i < keep.size(); ++i)
     for (size_t j = 0; j < keep.size(); ++j) ASSERT_EQ(P(i, j), P0(keep[i], keep[j]));

@@ -78,7 +78,7 @@ TEST(MechanizationSwitch, WorldToSensorJacobianMatchesNumeric) {
   const Eigen::MatrixXd Jn =
       numericFrameChangeJacobian(s0, [](FilterState& s) { switchMechanization(s, Mechanization::kSensorCentric); });
   const Eigen::MatrixXd J = denseJacobian(worldToSensorJacobian(s0), s0.numLandmarks());
-  ASSERT_EQ(J.rows(), 21 + 9);
+  ASSERT_EQ(J.rows(), idx::kSensorCentricDim + 9);
   EXPECT_LT(test::maxAbs(Jn - J), 1e-7) << "\n" << Jn - J;
 }
 
@@ -88,7 +88,7 @@ TEST(MechanizationSwitch, SensorToWorldJacobianMatchesNumeric) {
   const Eigen::MatrixXd Jn =
       numericFrameChangeJacobian(s0, [](FilterState& s) { switchMechanization(s, Mechanization::kWorldCentric); });
   const Eigen::MatrixXd J = denseJacobian(sensorToWorldJacobian(s0), s0.numLandmarks());
-  ASSERT_EQ(J.rows(), 15 + 9);
+  ASSERT_EQ(J.rows(), idx::kWorldCentricDim + 9);
   EXPECT_LT(test::maxAbs(Jn - J), 1e-7) << "\n" << Jn - J;
 }
 
@@ -98,7 +98,7 @@ TEST(MechanizationSwitch, RoundTripsPreserveNavigationQuantitiesAndMap) {
   const FilterState w0 = w;
   switchMechanization(w, Mechanization::kSensorCentricComposition);
   EXPECT_EQ(w.mechanization(), Mechanization::kSensorCentricComposition);
-  EXPECT_EQ(w.dim(), 21 + 24);
+  EXPECT_EQ(w.dim(), idx::kSensorCentricDim + 24);
   expectSameNavigationView(w0, w, 1e-9);
   switchMechanization(w, Mechanization::kWorldCentric);
   expectSameNavigationView(w0, w, 1e-9);
@@ -134,7 +134,7 @@ TEST(NavigationOutput, SensorCentricCovarianceMatchesNumericPropagation) {
         FilterState s = s0;
         s.boxplus(d);
         const NavState n = navState(s);
-        Eigen::VectorXd e(15);
+        Eigen::VectorXd e(idx::kNavDim);
         e << n.p_n_b - n0.p_n_b, n.v_n_b - n0.v_n_b, n.b_a - n0.b_a, rotationError(n.q_n_b, n0.q_n_b), n.b_g - n0.b_g;
         return e;
       },

@@ -132,7 +132,7 @@ TEST(Propagation, DiscreteNoiseMatchesDensities) {
   ImuNoiseParams noise;
   noise.accel_noise_density = 0.01;
   noise.gyro_random_walk = 1e-4;
-  const MotionMatrix I = MotionMatrix::Identity(15, 15);
+  const MotionMatrix I = MotionMatrix::Identity(idx::kWorldCentricDim, idx::kWorldCentricDim);
   const MotionMatrix Qd = discreteNoise(I, Mechanization::kWorldCentric, noise, 0.01);
   EXPECT_NEAR(Qd(idx::kV, idx::kV), 1e-4 * 0.01, 1e-15);
   EXPECT_NEAR(Qd(idx::kBg, idx::kBg), 1e-8 * 0.01, 1e-20);

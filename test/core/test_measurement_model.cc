@@ -40,6 +40,36 @@ TEST_P(MeasurementModelTest, JacobianMatchesNumeric) {
 INSTANTIATE_TEST_SUITE_P(Mechanizations, MeasurementModelTest,
                          ::testing::Values(Mechanization::kWorldCentric, Mechanization::kSensorCentric));
 
+// The time offset's Jacobian is the pixel's rate of change while the body moves with its
+// velocity v_s_b and turns with omega_b: checked against the numerical derivative of the
+// projection along that motion (Cartesian and inverse-depth points, camera off the IMU origin).
+TEST(MeasurementModel, ImageVelocityIsTheNumericalTimeDerivative) {
+  std::mt19937_64 rng(31);
+  const CameraModel cam = test::paperCamera();
+  CameraExtrinsics T = test::forwardCamera();
+  T.p_b_c = Vec3(0.05, -0.03, 0.1);
+  for (int trial = 0; trial < 5; ++trial) {
+    const FilterState s0 = test::randomState(Mechanization::kSensorCentric, 4, rng);
+    const Vec3 omega_b = test::randomVec(rng, 2.0);
+    for (int i = 0; i < s0.numLandmarks(); ++i) {
+      Eigen::Vector2d velocity;
+      ASSERT_TRUE(predictImageVelocity(s0.x, s0.landmark(i), cam, T, omega_b, &velocity));
+      auto pixelAt = [&](double tau) {
+        MotionState x = s0.x;
+        x.p_s_b += x.v_s_b * tau;
+        x.q_s_b = x.q_s_b * expQuat(omega_b * tau);
+        Eigen::Vector2d uv;
+        predictObservation(x, s0.landmark(i), cam, T, &uv);
+        return uv;
+      };
+      const double h = 1e-6;
+      const Eigen::Vector2d numeric = (pixelAt(h) - pixelAt(-h)) / (2.0 * h);
+      EXPECT_LT((numeric - velocity).norm(), 1e-5 * std::max(1.0, velocity.norm()))
+          << numeric.transpose() << " vs " << velocity.transpose();
+    }
+  }
+}
+
 TEST(MeasurementModel, PredictsTheSimulatedPixel) {
   // A landmark straight ahead of the camera projects onto the principal point.
   const CameraModel cam = test::paperCamera();

@@ -51,8 +51,13 @@ class EkfSlam {
   /// Latest buffered IMU time (or -inf).
   double latestImuTime() const;
 
-  /// Propagates to the image time, updates with known landmarks, adds new ones and composes.
+  /// Propagates to the image time on the IMU clock (stamp + time offset estimate), updates with
+  /// known landmarks, adds new ones and composes. frame.timestamp is on the camera clock.
   FrameResult processFrame(const CameraFrame& frame);
+  /// A camera stamp on the IMU clock, with the current time offset estimate [s].
+  double imuTime(double camera_stamp) const {
+    return camera_stamp + (initialized_ ? state_.x.t_d : config_.camera_time_offset_s);
+  }
 
   /// Applies a new configuration to the running filter: validates it (false and the problems in
   /// *error otherwise), converts the mechanization if it changed, and uses every other value
@@ -90,6 +95,7 @@ class EkfSlam {
   std::deque<ImuData> imu_;
   std::deque<ImuData> recent_imu_;  ///< samples since the last frame's rest window (bounded by imu_buffer_max)
   std::unordered_map<std::int64_t, double> last_seen_;
+  Vec3 last_gyro_ = Vec3::Zero();  ///< the angular rate [rad/s] (raw) of the last propagation step
   int compositions_ = 0;
   int imu_gaps_ = 0;
   int zero_velocity_updates_ = 0;

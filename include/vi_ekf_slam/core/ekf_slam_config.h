@@ -38,6 +38,9 @@ struct InitialUncertainty {
   double yaw_rad = 0.035;          ///< ~2 deg
   double accel_bias_mps2 = 0.05;
   double gyro_bias_radps = 0.002;
+  /// Camera-IMU time offset [s]; 0 keeps camera_time_offset_s fixed. A rig whose camera and
+  /// IMU share no hardware clock is off by tens of ms (the hand-held RealSense: 47 ms).
+  double time_offset_s = 0.05;
 };
 
 /// Defaults are the most consistent configuration of the study (README): sensor-centric with
@@ -49,7 +52,10 @@ struct EkfSlamConfig {
   int composition_new_landmarks = 4;  ///< compose when MORE than this many are new (paper: 4)
   ImuNoiseParams imu_noise;
   double gravity_mps2 = 9.81;  ///< local gravity magnitude [m/s^2]
-  UpdateParams update;         ///< pixel noise [px] and chi^2 gate probability
+  /// Camera-IMU time offset at the start [s]: t_imu = t_image + t_d. Estimated online from here
+  /// when initial.time_offset_s > 0.
+  double camera_time_offset_s = 0.0;
+  UpdateParams update;  ///< pixel noise [px] and chi^2 gate probability
   LandmarkInitMethod landmark_init = LandmarkInitMethod::kInverseDepth;
   double landmark_depth_m = 8.0;         ///< fixed depth of new landmarks [m]
   double landmark_depth_sigma_m = 4.0;   ///< std-dev along the ray [m]

@@ -22,8 +22,11 @@ struct UpdateResult {
   double nis_sum = 0.0;                    ///< sum of accepted normalized innovations squared
 };
 
-/// Updates state and covariance with observations of landmarks that are in the map.
+/// Updates state and covariance with observations of landmarks that are in the map. omega_b is
+/// the body's angular rate [rad/s] (bias-corrected gyro): with the velocity in the state it gives
+/// each observation's Jacobian w.r.t. the camera-IMU time offset (predictImageVelocity).
 UpdateResult ekfUpdate(FilterState& state, const std::vector<FeatureObservation>& observations,
-                       const CameraModel& camera, const CameraExtrinsics& T_b_c, const UpdateParams& params);
+                       const CameraModel& camera, const CameraExtrinsics& T_b_c, const UpdateParams& params,
+                       const Vec3& omega_b = Vec3::Zero());
 
 }  // namespace vi_ekf_slam

@@ -27,6 +27,7 @@ struct MotionState {
   Vec3 b_a = Vec3::Zero();    ///< accelerometer bias [m/s^2]
   Quat q_s_b = Quat::Identity();
   Vec3 b_g = Vec3::Zero();    ///< gyroscope bias [rad/s]
+  double t_d = 0.0;           ///< camera-IMU time offset: t_imu = t_image + t_d [s]
   Vec3 p_n_s = Vec3::Zero();  ///< position of {s} in {n} [m]
   Quat q_n_s = Quat::Identity();
 };

@@ -32,4 +32,12 @@ Vec3 landmarkInCamera(const MotionState& x, const Vec3& p_s_l, const CameraExtri
 bool predictObservation(const MotionState& x, const Landmark& landmark, const CameraModel& camera,
                         const CameraExtrinsics& T_b_c, Eigen::Vector2d* uv, ObservationJacobians* J = nullptr);
 
+/// Image velocity [px/s] of a landmark's projection while the body moves with the velocity
+/// x.v_s_b and the angular rate omega_b [rad/s] (body frame): d(pixel)/dt, which is also the
+/// observation's Jacobian w.r.t. the camera-IMU time offset t_d (the image at t_i is the state at
+/// t_i + t_d). It comes from the state alone: a velocity from differences of measured pixels
+/// would share the current pixel's noise with the residual and bias t_d. False if behind the camera.
+bool predictImageVelocity(const MotionState& x, const Landmark& landmark, const CameraModel& camera,
+                          const CameraExtrinsics& T_b_c, const Vec3& omega_b, Eigen::Vector2d* velocity_pxps);
+
 }  // namespace vi_ekf_slam

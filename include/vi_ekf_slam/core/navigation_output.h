@@ -16,8 +16,10 @@ struct NavState {
   Quat q_n_b = Quat::Identity();
   Vec3 b_a = Vec3::Zero();
   Vec3 b_g = Vec3::Zero();
+  double t_d = 0.0;        ///< camera-IMU time offset estimate: t_imu = t_image + t_d [s]
+  double t_d_sigma = 0.0;  ///< its std-dev [s]
   /// Covariance in the world-centric error layout [p, v, b_a, psi_n_b, b_g] (idx::kP ...).
-  Eigen::Matrix<double, 15, 15> cov = Eigen::Matrix<double, 15, 15>::Zero();
+  Eigen::Matrix<double, idx::kNavDim, idx::kNavDim> cov = Eigen::Matrix<double, idx::kNavDim, idx::kNavDim>::Zero();
 
   /// 6x6 pose covariance ordered [position, orientation (psi_n_b, global)].
   Eigen::Matrix<double, 6, 6> poseCovariance() const;

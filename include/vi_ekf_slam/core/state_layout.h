@@ -22,16 +22,21 @@ std::optional<Mechanization> mechanizationFromString(const std::string& s);
 
 namespace idx {
 // Error-state block offsets. In the world-centric filter {s} == {n}.
-constexpr int kP = 0;       ///< position of {b} in {s}
-constexpr int kV = 3;       ///< velocity of {b} in {s}
-constexpr int kBa = 6;      ///< accelerometer bias
-constexpr int kPsi = 9;     ///< orientation error psi_s_b (global, in {s})
-constexpr int kBg = 12;     ///< gyroscope bias
-constexpr int kPns = 15;    ///< position of {s} in {n} (sensor-centric only)
-constexpr int kPsiNs = 18;  ///< orientation error psi_n_s (sensor-centric only)
-constexpr int kWorldCentricDim = 15;
-constexpr int kSensorCentricDim = 21;
-constexpr int kMaxMotionDim = 21;
+constexpr int kP = 0;    ///< position of {b} in {s}
+constexpr int kV = 3;    ///< velocity of {b} in {s}
+constexpr int kBa = 6;   ///< accelerometer bias
+constexpr int kPsi = 9;  ///< orientation error psi_s_b (global, in {s})
+constexpr int kBg = 12;  ///< gyroscope bias
+/// Camera-IMU time offset t_d (t_imu = t_image + t_d) [s], estimated online like OpenVINS's
+/// calib_dt; a zero initial sigma keeps it fixed (its row and column of P stay zero).
+constexpr int kTd = 15;
+constexpr int kPns = 16;    ///< position of {s} in {n} (sensor-centric only)
+constexpr int kPsiNs = 19;  ///< orientation error psi_n_s (sensor-centric only)
+constexpr int kWorldCentricDim = 16;
+constexpr int kSensorCentricDim = 22;
+constexpr int kMaxMotionDim = 22;
+/// The navigation output's covariance layout [p, v, b_a, psi, b_g] (NavState::cov).
+constexpr int kNavDim = 15;
 constexpr int kLandmarkDim = 3;
 }  // namespace idx
 

@@ -24,7 +24,7 @@ struct FeatureObservation {
 
 /// All features of one camera image.
 struct CameraFrame {
-  double timestamp = 0.0;  ///< [s], already corrected by any camera-IMU time offset
+  double timestamp = 0.0;  ///< [s] on the camera's clock; the filter adds its time offset estimate
   std::vector<FeatureObservation> features;
 };
 

@@ -19,7 +19,6 @@ struct NodeOptions {
   std::string body_frame = "imu";     ///< the IMU/body frame, child of world_frame
   bool publish_tf = true;
   bool tune_allocator = true;                         ///< see core/allocator_tuning.h
-  double camera_time_offset_s = 0.0;                  ///< t_imu = t_image + offset [s]
   std::string camera_calibration_file;                ///< ROS camera YAML used while no camera_info arrives
   std::string extrinsic_source = "tf";                ///< "tf" (body_frame <- image frame_id) or "parameters"
   std::vector<double> T_b_c = {0, 0, 0, 0, 0, 0, 1};  ///< x y z qx qy qz qw of the camera in the body [m]

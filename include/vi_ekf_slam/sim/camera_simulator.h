@@ -20,6 +20,9 @@ struct CameraSimParams {
   int max_features = 40;  ///< tracks kept per image, like a tracker's target count
   int grid_cols = 4;      ///< new tracks are spread over a grid, like a tracker's detector
   int grid_rows = 3;
+  /// Camera-IMU clock offset of the simulated rig [s]: a frame taken at true (IMU) time t is
+  /// stamped t - time_offset_s, so t_imu = t_image + time_offset_s.
+  double time_offset_s = 0.0;
 };
 
 /// Noise-free projections of every landmark of `world` visible from the body pose at `sample`

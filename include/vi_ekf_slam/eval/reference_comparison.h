@@ -1,0 +1,40 @@
+// Comparison of an estimated trajectory with a reference trajectory of unknown frame (and, for
+// vision-only references, unknown scale), as users do with `evo_ape --align [--correct_scale]`:
+// the reference is interpolated at the estimate's stamps, aligned onto the estimate by Umeyama
+// (Eigen::umeyama) with SE(3), Sim(3) or position + yaw, and the residuals are measured in the
+// estimate's metres.
+#pragma once
+
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "vi_ekf_slam/eval/tum_io.h"
+
+namespace vi_ekf_slam::eval {
+
+enum class Alignment { kSE3, kPosYaw, kSim3 };
+std::optional<Alignment> alignmentFromString(const std::string& s);
+std::string toString(Alignment a);
+
+struct ReferenceComparison {
+  Alignment alignment = Alignment::kSim3;
+  int matched = 0;                 ///< estimates with a reference pose interpolated at their stamp
+  double position_rmse_m = 0.0;    ///< after alignment, in the estimate's metres
+  double rotation_rmse_deg = 0.0;  ///< of the aligned orientations
+  double scale = 1.0;              ///< reference units per metre of the estimate (1 unless Sim(3))
+  double estimate_path_m = 0.0;    ///< path length of the matched estimates [m]
+  double reference_path_m = 0.0;   ///< of the matched reference poses, in the estimate's metres
+  std::vector<double> t;           ///< stamps of the matched estimates
+  std::vector<Vec3> estimate;      ///< matched estimated positions
+  std::vector<Vec3> reference;     ///< the reference positions aligned onto the estimate
+};
+
+/// Interpolates `reference` (sorted by time) at each estimate stamp (linear position, slerp),
+/// where the two reference poses around it are at most max_gap_s apart, aligns and measures.
+/// Throws std::invalid_argument with fewer than three matches.
+ReferenceComparison compareWithReference(const std::vector<StampedPose>& estimate,
+                                         const std::vector<StampedPose>& reference, Alignment alignment,
+                                         double max_gap_s = 0.5);
+
+}  // namespace vi_ekf_slam::eval

@@ -1,0 +1,94 @@
+#include "vi_ekf_slam/eval/reference_comparison.h"
+
+#include <Eigen/Geometry>
+#include <algorithm>
+#include <cmath>
+#include <stdexcept>
+
+#include "vi_ekf_slam/eval/metrics.h"
+
+namespace vi_ekf_slam::eval {
+
+std::optional<Alignment> alignmentFromString(const std::string& s) {
+  for (auto a : {Alignment::kSE3, Alignment::kPosYaw, Alignment::kSim3}) {
+    if (toString(a) == s) return a;
+  }
+  return std::nullopt;
+}
+
+std::string toString(Alignment a) {
+  switch (a) {
+    case Alignment::kSE3:
+      return "se3";
+    case Alignment::kPosYaw:
+      return "posyaw";
+    case Alignment::kSim3:
+      return "sim3";
+  }
+  return "unknown";
+}
+
+ReferenceComparison compareWithReference(const std::vector<StampedPose>& estimate,
+                                         const std::vector<StampedPose>& reference, Alignment alignment,
+                                         double max_gap_s) {
+  ReferenceComparison out;
+  out.alignment = alignment;
+  std::vector<Vec3> p_ref;
+  std::vector<Quat> q_ref, q_est;
+  for (const auto& e : estimate) {
+    const auto it = std::lower_bound(reference.begin(), reference.end(), e.t,
+                                     [](const StampedPose& r, double t) { return r.t < t; });
+    if (it == reference.end()) continue;
+    // it->t >= e.t: interpolate between the pose before and it (or take it if the stamps agree).
+    const StampedPose& b = *it;
+    const StampedPose& a = (it == reference.begin() || b.t - e.t < 1e-6) ? b : *(it - 1);
+    if (b.t - a.t > max_gap_s || (&a == &b && b.t - e.t >= 1e-6)) continue;
+    const double alpha = b.t > a.t ? (e.t - a.t) / (b.t - a.t) : 0.0;
+    out.t.push_back(e.t);
+    out.estimate.push_back(e.p);
+    q_est.push_back(e.q);
+    p_ref.push_back((1.0 - alpha) * a.p + alpha * b.p);
+    q_ref.push_back(a.q.slerp(alpha, b.q));
+  }
+  out.matched = static_cast<int>(out.t.size());
+  if (out.matched < 3) {
+    throw std::invalid_argument("compareWithReference: only " + std::to_string(out.matched) +
+                                " estimates fall inside the reference's time span");
+  }
+  // The reference is mapped onto the estimate: p_est ~ c R p_ref + t, so residuals are metres.
+  Mat3 R = Mat3::Identity();
+  Vec3 t = Vec3::Zero();
+  double c = 1.0;
+  if (alignment == Alignment::kPosYaw) {
+    const YawTranslation fit = alignPosYaw(p_ref, out.estimate);
+    R = Eigen::AngleAxisd(fit.yaw, Vec3::UnitZ()).toRotationMatrix();
+    t = fit.t;
+  } else {
+    Eigen::Matrix3Xd src(3, out.matched), dst(3, out.matched);
+    for (int i = 0; i < out.matched; ++i) {
+      src.col(i) = p_ref[static_cast<size_t>(i)];
+      dst.col(i) = out.estimate[static_cast<size_t>(i)];
+    }
+    const Eigen::Matrix4d T = Eigen::umeyama(src, dst, alignment == Alignment::kSim3);
+    c = T.block<3, 1>(0, 0).norm();
+    R = T.topLeftCorner<3, 3>() / c;
+    t = T.topRightCorner<3, 1>();
+  }
+  out.scale = 1.0 / c;
+  std::vector<Vec3> e_p;
+  std::vector<double> e_q;
+  for (int i = 0; i < out.matched; ++i) {
+    const size_t k = static_cast<size_t>(i);
+    out.reference.push_back(c * R * p_ref[k] + t);
+    e_p.push_back(out.reference.back() - out.estimate[k]);
+    const Quat q_aligned = Quat(R) * q_ref[k];
+    e_q.push_back(orientationError(q_aligned, q_est[k]).norm() * 180.0 / M_PI);
+  }
+  out.position_rmse_m = rms(e_p);
+  out.rotation_rmse_deg = rms(e_q);
+  out.estimate_path_m = pathLength(out.estimate);
+  out.reference_path_m = pathLength(out.reference);
+  return out;
+}
+
+}  // namespace vi_ekf_slam::eval
