@@ -3,8 +3,9 @@
 // evaluates the result against the bag's ground truth.
 //
 //   vi_ekf_slam_run_bag bag:=FILE [out:=DIR] [config:=YAML] [mechanization:=NAME|all] [plots:=false]
-//                       [reference:=FILE.tum [reference_alignment:=sim3|se3|posyaw]
+//                       [reference:=FILE.tum[,FILE2.tum] [reference_alignment:=sim3|se3|posyaw]
 //                        [reference_frame:=body|camera] [reference_clock:=imu|camera]] [NAME:=VALUE ...]
+// (the reference_* options take one value for every file or one per file, comma-separated)
 //   vi_ekf_slam_run_bag bag:=FILE recorded:=NAME=REC.bag[,NAME=REC.bag...] [out:=DIR]
 // The second form evaluates recordings of live replays (odom, status, landmarks of the node)
 // against the same input bag, with the same metrics.
@@ -173,8 +174,8 @@ std::string healthTable(const nlohmann::json& health) {
        << h["nis_per_dof_mean"].get<double>() << " | " << std::setprecision(4) << h["time_offset_s"].get<double>()
        << " | " << std::setprecision(1) << h["processing_ms_mean"].get<double>() << " | "
        << h["real_time_factor"].get<double>() << " | ";
-    if (h.contains("reference") && h["reference"].contains("position_rmse_m")) {
-      const auto& r = h["reference"];
+    if (h.contains("references") && h["references"][0].contains("position_rmse_m")) {
+      const auto& r = h["references"][0];
       md << std::setprecision(3) << r["position_rmse_m"].get<double>() << " | "
          << r["scale_reference_units_per_m"].get<double>() << " | " << std::setprecision(2)
          << r["rotation_rmse_deg"].get<double>() << " |\n";
@@ -198,6 +199,47 @@ void writeTrace(const std::string& path, const RecordingSink& sink) {
   }
 }
 
+struct Reference {
+  std::string path, frame, clock;
+  eval::Alignment alignment = eval::Alignment::kSim3;
+  std::vector<eval::StampedPose> poses;
+};
+
+std::vector<std::string> splitList(const std::string& s) {
+  std::vector<std::string> out;
+  std::stringstream ss(s);
+  std::string item;
+  while (std::getline(ss, item, ',')) out.push_back(item);
+  return out;
+}
+
+/// reference:=A[,B...] with reference_frame/_clock/_alignment:= one value or one per file.
+std::vector<Reference> parseReferences(std::map<std::string, std::string>& args) {
+  std::vector<Reference> refs;
+  if (!args.count("reference")) return refs;
+  const auto files = splitList(args["reference"]);
+  auto pick = [&](const std::string& key, const std::string& fallback, size_t i) {
+    const auto v = args.count(key) ? splitList(args[key]) : std::vector<std::string>{fallback};
+    if (v.size() != 1 && v.size() != files.size()) throw std::runtime_error(key + ":= needs one value or one per file");
+    return v.size() == 1 ? v[0] : v[i];
+  };
+  for (size_t i = 0; i < files.size(); ++i) {
+    Reference r;
+    r.path = files[i];
+    r.frame = pick("reference_frame", "body", i);
+    r.clock = pick("reference_clock", "imu", i);
+    const auto a = eval::alignmentFromString(pick("reference_alignment", "sim3", i));
+    if (!a || (r.frame != "body" && r.frame != "camera") || (r.clock != "imu" && r.clock != "camera")) {
+      throw std::runtime_error(
+          "reference_alignment:= sim3|se3|posyaw, reference_frame:= body|camera, reference_clock:= imu|camera");
+    }
+    r.alignment = *a;
+    r.poses = eval::readTum(r.path);
+    refs.push_back(std::move(r));
+  }
+  return refs;
+}
+
 /// The estimate as the reference sees it: the camera's poses (through the bag's extrinsic) or the
 /// body's, stamped on the IMU clock or on the camera clock (minus the estimated time offset).
 std::vector<eval::StampedPose> referenceView(const RecordingSink& sink, const glue::InputBagInfo& info,
@@ -205,20 +247,15 @@ std::vector<eval::StampedPose> referenceView(const RecordingSink& sink, const gl
   if (frame == "camera" && !info.T_b_c) throw std::runtime_error("the bag has no camera-IMU extrinsic");
   std::map<double, double> offset_at;
   for (const auto& r : sink.trace) offset_at[r.t] = r.status.time_offset_s;
-  std::vector<eval::StampedPose> out;
+  std::vector<eval::StampedPose> poses;
+  std::vector<double> offsets;
   for (const auto& p : sink.poses) {
-    eval::StampedPose s{p.t, p.p, p.q, std::nullopt};
-    if (frame == "camera") {
-      s.p = p.p + p.q * info.T_b_c->p_b_c;
-      s.q = p.q * Quat(info.T_b_c->R_b_c);
-    }
-    if (clock == "camera") {
-      const auto it = offset_at.find(p.t);
-      s.t = p.t - (it != offset_at.end() ? it->second : 0.0);
-    }
-    out.push_back(s);
+    poses.push_back({p.t, p.p, p.q, std::nullopt});
+    const auto it = offset_at.find(p.t);
+    offsets.push_back(it != offset_at.end() ? it->second : 0.0);
   }
-  return out;
+  return eval::referenceView(poses, frame == "camera" ? info.T_b_c : std::nullopt,
+                             clock == "camera" ? &offsets : nullptr);
 }
 
 /// Evaluates a recording of the node's outputs (/vi_ekf_slam/odom, status, landmarks).
@@ -282,23 +319,14 @@ int main(int argc, char** argv) {
   else
     mechanizations = {mech};
 
-  std::optional<std::vector<eval::StampedPose>> reference;
-  const std::string ref_frame = args.count("reference_frame") ? args["reference_frame"] : "body";
-  const std::string ref_clock = args.count("reference_clock") ? args["reference_clock"] : "imu";
-  const auto ref_alignment =
-      eval::alignmentFromString(args.count("reference_alignment") ? args["reference_alignment"] : "sim3");
-  if (!ref_alignment || (ref_frame != "body" && ref_frame != "camera") ||
-      (ref_clock != "imu" && ref_clock != "camera")) {
-    std::cerr << "reference_alignment:= sim3|se3|posyaw, reference_frame:= body|camera, reference_clock:= imu|camera\n";
+  // reference:=A.tum[,B.tum...]; reference_frame / reference_clock / reference_alignment give one
+  // value for all or one per file.
+  std::vector<Reference> references;
+  try {
+    references = parseReferences(args);
+  } catch (const std::exception& e) {
+    std::cerr << "error: " << e.what() << "\n";
     return 2;
-  }
-  if (args.count("reference")) {
-    try {
-      reference = eval::readTum(args["reference"]);
-    } catch (const std::exception& e) {
-      std::cerr << "error: " << e.what() << "\n";
-      return 1;
-    }
   }
   nlohmann::json health;
 
@@ -383,36 +411,38 @@ int main(int argc, char** argv) {
     health[name] = healthOf(sink, bag_s, wall);
     writeTrace(out + "/" + name + "_trace.csv", sink);
     printHealth(name, health[name]);
-    if (reference) {
+    nlohmann::json comparisons = nlohmann::json::array();
+    for (size_t k = 0; k < references.size(); ++k) {
+      const Reference& ref = references[k];
+      nlohmann::json j = {
+          {"file", ref.path}, {"frame", ref.frame}, {"clock", ref.clock}, {"alignment", eval::toString(ref.alignment)}};
       try {
         const eval::ReferenceComparison c =
-            eval::compareWithReference(referenceView(sink, info, ref_frame, ref_clock), *reference, *ref_alignment);
-        health[name]["reference"] = {{"file", args["reference"]},
-                                     {"alignment", eval::toString(c.alignment)},
-                                     {"frame", ref_frame},
-                                     {"clock", ref_clock},
-                                     {"matched", c.matched},
-                                     {"position_rmse_m", c.position_rmse_m},
-                                     {"rotation_rmse_deg", c.rotation_rmse_deg},
-                                     {"scale_reference_units_per_m", c.scale},
-                                     {"estimate_path_m", c.estimate_path_m},
-                                     {"reference_path_m", c.reference_path_m}};
+            eval::compareWithReference(referenceView(sink, info, ref.frame, ref.clock), ref.poses, ref.alignment);
+        j.update({{"matched", c.matched},
+                  {"position_rmse_m", c.position_rmse_m},
+                  {"rotation_rmse_deg", c.rotation_rmse_deg},
+                  {"scale_reference_units_per_m", c.scale},
+                  {"estimate_path_m", c.estimate_path_m},
+                  {"reference_path_m", c.reference_path_m}});
         std::printf(
             "  against %s (%s, %s poses, %s clock): %d matched, position RMSE %.3f m, rotation RMSE %.2f deg, "
             "scale %.3f reference units per metre, path %.2f m (reference %.2f m)\n",
-            args["reference"].c_str(), eval::toString(c.alignment).c_str(), ref_frame.c_str(), ref_clock.c_str(),
-            c.matched, c.position_rmse_m, c.rotation_rmse_deg, c.scale, c.estimate_path_m, c.reference_path_m);
-        std::ofstream rc(out + "/" + name + "_reference.csv");
+            ref.path.c_str(), eval::toString(c.alignment).c_str(), ref.frame.c_str(), ref.clock.c_str(), c.matched,
+            c.position_rmse_m, c.rotation_rmse_deg, c.scale, c.estimate_path_m, c.reference_path_m);
+        std::ofstream rc(out + "/" + name + "_reference" + (k ? std::to_string(k + 1) : "") + ".csv");
         rc << "t,ex,ey,ez,rx,ry,rz\n" << std::setprecision(12);
         for (size_t i = 0; i < c.t.size(); ++i) {
           rc << c.t[i] << "," << c.estimate[i].x() << "," << c.estimate[i].y() << "," << c.estimate[i].z() << ","
              << c.reference[i].x() << "," << c.reference[i].y() << "," << c.reference[i].z() << "\n";
         }
       } catch (const std::exception& e) {
-        std::printf("  against %s: not comparable: %s\n", args["reference"].c_str(), e.what());
-        health[name]["reference"] = {{"file", args["reference"]}, {"error", e.what()}};
+        std::printf("  against %s: not comparable: %s\n", ref.path.c_str(), e.what());
+        j["error"] = e.what();
       }
+      comparisons.push_back(j);
     }
+    if (!references.empty()) health[name]["references"] = comparisons;
     if (info.truth.empty()) continue;
     std::vector<eval::EstimatedLandmark> lms;
     for (const auto& [id, l] : sink.map) lms.push_back(l);

@@ -6,6 +6,7 @@
 //                     [--configs paper|all|name,name,...] [--threads N] [--density 1.0]
 //                     [--per-metre 15] [--start-offset S] [--max-duration S] [--max-landmarks N]
 //                     [--imu ASL_IMU_CSV] [--imu-noise datasheet|euroc_mav] [--preset openvins_sim]
+//                     [--inverse-depth INITIAL_DEPTH_M,SIGMA_PER_M]
 //
 // --preset openvins_sim: OpenVINS's simulator setup on a TUM file (sim/openvins_preset.h).
 // --start-offset / --max-duration: a time window of the trajectory (e.g. start while walking).
@@ -55,6 +56,10 @@ struct Options {
   // "truth": every run starts at the true state (the preset's default, like OpenVINS);
   // "prior": the start error is drawn from the filter's initial covariance (default otherwise).
   std::string start;
+  // --inverse-depth M,S: prior depth 1/rho0 [m] and sigma of rho [1/m] of new inverse-depth
+  // landmarks in every configuration (default: the core's).
+  std::string inverse_depth;
+  double inverse_depth_initial_m = 0.0, inverse_depth_sigma = 0.0;
   double gate = 0.0;  // chi^2 gate probability of every configuration; 0: the core's default
   // +zero_velocity: "wait" (the core's default): new landmarks wait until the standing detector
   // sees the rig move, unless the IMU shows rest; "immediate": whenever a track is new.
@@ -113,6 +118,8 @@ Options parse(int argc, char** argv) {
         o.gate = std::stod(v);
       else if (k == "--new-landmarks")
         o.new_landmarks = v;
+      else if (k == "--inverse-depth")
+        o.inverse_depth = v;
       else
         usage("unknown option " + k);
     } catch (const std::logic_error&) {
@@ -128,6 +135,11 @@ Options parse(int argc, char** argv) {
   if (o.gate != 0.0 && !(o.gate > 0.0 && o.gate < 1.0)) usage("--gate must be in (0, 1)");
   if (!o.start.empty() && o.start != "truth" && o.start != "prior") usage("--start must be truth or prior");
   if (o.new_landmarks != "wait" && o.new_landmarks != "immediate") usage("--new-landmarks must be wait or immediate");
+  if (!o.inverse_depth.empty() &&
+      (std::sscanf(o.inverse_depth.c_str(), "%lf,%lf", &o.inverse_depth_initial_m, &o.inverse_depth_sigma) != 2 ||
+       !(o.inverse_depth_initial_m > 0.0) || !(o.inverse_depth_sigma > 0.0))) {
+    usage("--inverse-depth needs INITIAL_DEPTH_M,SIGMA_PER_M (both > 0)");
+  }
   if (!o.preset.empty() && o.preset != "openvins_sim") usage("unknown --preset '" + o.preset + "'");
   if (!o.preset.empty() && (o.trajectory == "builtin" || !o.imu.empty())) usage("--preset needs a TUM --trajectory");
   return o;
@@ -163,6 +175,10 @@ std::vector<std::pair<std::string, EkfSlamConfig>> makeConfigs(const Options& o,
     c.max_landmarks = o.max_landmarks > 0 ? o.max_landmarks : (o.preset.empty() ? 300 : 100);
     if (o.preset == "openvins_sim") c.initial = sim::openvinsSimInitialUncertainty();
     c.zero_velocity.enabled = zero_velocity;
+    if (!o.inverse_depth.empty()) {
+      c.inverse_depth_initial_m = o.inverse_depth_initial_m;
+      c.inverse_depth_sigma = o.inverse_depth_sigma;
+    }
     c.zero_velocity.defer_landmarks = o.new_landmarks == "wait";
     // The recorded IMU is EuRoC's MAV: standing on the ground it does not sway like a pedestrian.
     if (!o.imu.empty()) c.zero_velocity.velocity_sigma_mps = eval::kEurocMavStandingVelocitySigma;

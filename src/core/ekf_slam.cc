@@ -36,6 +36,7 @@ void EkfSlam::reset() {
   imu_gaps_ = 0;
   zero_velocity_updates_ = 0;
   stationary_.reset();
+  divergence_.reset();
   seen_moving_ = false;
 }
 
@@ -66,6 +67,7 @@ void EkfSlam::initialize(const NavState& init) {
   state_ = std::move(s);
   last_seen_.clear();
   stationary_.reset();
+  divergence_.reset();
   seen_moving_ = false;
   compositions_ = 0;
   zero_velocity_updates_ = 0;
@@ -271,6 +273,8 @@ FrameResult EkfSlam::processFrame(const CameraFrame& camera_frame) {
     ++compositions_;
     r.composed = true;
   }
+  r.lost = divergence_.update(frame.timestamp, state_, r.update.accepted,
+                              static_cast<int>(r.update.rejected_ids.size()), config_.divergence);
   r.processed = true;
   return r;
 }

@@ -94,6 +94,7 @@ std::string EkfSlamConfig::validate() const {
   if (!(zero_velocity.gate_probability > 0.0 && zero_velocity.gate_probability < 1.0)) {
     err << "zero_velocity.gate_probability must be in (0, 1) (got " << zero_velocity.gate_probability << ")\n";
   }
+  err << divergence.validate();
   return err.str();
 }
 

@@ -28,6 +28,27 @@ std::string toString(Alignment a) {
   return "unknown";
 }
 
+std::vector<StampedPose> referenceView(const std::vector<StampedPose>& body_poses,
+                                       const std::optional<CameraExtrinsics>& T_b_c,
+                                       const std::vector<double>* time_offsets_s) {
+  if (time_offsets_s && time_offsets_s->size() != body_poses.size()) {
+    throw std::invalid_argument("referenceView: one time offset per pose");
+  }
+  std::vector<StampedPose> out;
+  out.reserve(body_poses.size());
+  for (size_t i = 0; i < body_poses.size(); ++i) {
+    StampedPose s = body_poses[i];
+    s.cov.reset();
+    if (T_b_c) {
+      s.p = s.p + s.q * T_b_c->p_b_c;
+      s.q = (s.q * Quat(T_b_c->R_b_c)).normalized();
+    }
+    if (time_offsets_s) s.t -= (*time_offsets_s)[i];
+    out.push_back(s);
+  }
+  return out;
+}
+
 ReferenceComparison compareWithReference(const std::vector<StampedPose>& estimate,
                                          const std::vector<StampedPose>& reference, Alignment alignment,
                                          double max_gap_s) {

@@ -72,17 +72,7 @@ void RigBagWriter::image(double t, const cv::Mat& mono8) {
   h.stamp = ros::Time(t);
   h.frame_id = topics_.camera_frame;
   bag_.write(topics_.image, h.stamp, cv_bridge::CvImage(h, "mono8", mono8).toImageMsg());
-  sensor_msgs::CameraInfo ci;
-  ci.header = h;
-  const auto& k = camera_.intrinsics();
-  ci.width = static_cast<uint32_t>(k.width);
-  ci.height = static_cast<uint32_t>(k.height);
-  ci.distortion_model = k.model == DistortionModel::kEquidistant ? "equidistant" : "plumb_bob";
-  ci.D = k.distortion;
-  ci.K = {k.fx, 0, k.cx, 0, k.fy, k.cy, 0, 0, 1};
-  ci.R = {1, 0, 0, 0, 1, 0, 0, 0, 1};
-  ci.P = {k.fx, 0, k.cx, 0, 0, k.fy, k.cy, 0, 0, 0, 1, 0};
-  bag_.write(topics_.camera_info, h.stamp, ci);
+  bag_.write(topics_.camera_info, h.stamp, toCameraInfo(camera_.intrinsics(), h));
 }
 
 void RigBagWriter::groundTruth(double t, const Vec3& p, const Quat& q) {

@@ -25,6 +25,19 @@ std::optional<ImuData> fromImuMsg(const sensor_msgs::Imu& m) {
   return d;
 }
 
+sensor_msgs::CameraInfo toCameraInfo(const CameraIntrinsics& k, const std_msgs::Header& header) {
+  sensor_msgs::CameraInfo ci;
+  ci.header = header;
+  ci.width = static_cast<uint32_t>(k.width);
+  ci.height = static_cast<uint32_t>(k.height);
+  ci.distortion_model = k.model == DistortionModel::kEquidistant ? "equidistant" : "plumb_bob";
+  ci.D = k.distortion;
+  ci.K = {k.fx, 0, k.cx, 0, k.fy, k.cy, 0, 0, 1};
+  ci.R = {1, 0, 0, 0, 1, 0, 0, 0, 1};
+  ci.P = {k.fx, 0, k.cx, 0, 0, k.fy, k.cy, 0, 0, 0, 1, 0};
+  return ci;
+}
+
 std::string intrinsicsFromCameraInfo(const sensor_msgs::CameraInfo& m, CameraIntrinsics* out) {
   CameraIntrinsics c;
   c.width = static_cast<int>(m.width);

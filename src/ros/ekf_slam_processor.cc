@@ -291,6 +291,14 @@ void EkfSlamProcessor::processImage(const PendingImage& img) {
     reportProblem("outlier burst: " + std::to_string(rejected) + " of " + std::to_string(rejected + r.update.accepted) +
                   " observations rejected by the gate");
   }
+  if (!r.lost.empty()) {
+    // Nothing of a lost filter is published: start over (re-initialization at the next static
+    // interval), and say why in the events and the diagnostics.
+    ++counters_.divergences;
+    last_lost_ = r.lost;
+    reset("lost: " + r.lost);
+    return;
+  }
   const NavState nav = filter_->navState();
   if (!nav.p_n_b.allFinite() || !nav.q_n_b.coeffs().allFinite() || !nav.cov.allFinite()) {
     reset("the filter state became non-finite");

@@ -178,7 +178,10 @@ void EkfSlamRos::diagnoseFilter(diagnostic_updater::DiagnosticStatusWrapper& sta
   using diagnostic_msgs::DiagnosticStatus;
   const EkfSlam* f = processor_->filter();
   if (!f || !f->initialized()) {
-    stat.summary(DiagnosticStatus::WARN, "not initialized (waiting for camera and a static IMU interval)");
+    stat.summary(DiagnosticStatus::WARN, processor_->lastLost().empty()
+                                             ? "not initialized (waiting for camera and a static IMU interval)"
+                                             : "lost (" + processor_->lastLost() +
+                                                   "): reset, waiting for a static IMU interval to re-initialize");
   } else {
     stat.summary(DiagnosticStatus::OK, "running");
   }
@@ -190,6 +193,8 @@ void EkfSlamRos::diagnoseFilter(diagnostic_updater::DiagnosticStatusWrapper& sta
   stat.add("compositions", f ? f->compositions() : 0);
   stat.add("zero-velocity updates (standing)", f ? f->zeroVelocityUpdates() : 0);
   stat.add("resets", processor_->counters().resets);
+  stat.add("lost (divergence resets)", processor_->counters().divergences);
+  stat.add("last lost", processor_->lastLost());
   stat.add("last update [ms]", processor_->lastUpdateMs());
 }
 

@@ -292,6 +292,10 @@ std::string loadParams(const ParamSource& source, NodeParams* out) {
   rd("initial_sigma_yaw_rad", f.initial.yaw_rad);
   rd("initial_sigma_accel_bias_mps2", f.initial.accel_bias_mps2);
   rd("initial_sigma_gyro_bias_radps", f.initial.gyro_bias_radps);
+  rd("lost_detection", f.divergence.enabled);
+  rd("lost_max_speed_mps", f.divergence.max_speed_mps);
+  rd("lost_max_rejected_fraction", f.divergence.max_rejected_fraction);
+  rd("lost_window_s", f.divergence.window_s);
   rd("camera_time_offset_s", f.camera_time_offset_s);
   rd("initial_sigma_time_offset_s", f.initial.time_offset_s);
   StaticInitParams& s = p.static_init;
@@ -369,6 +373,9 @@ std::string describeParams(const NodeParams& p) {
     << " [m/s], roll/pitch " << f.initial.roll_pitch_rad << " [rad], yaw " << f.initial.yaw_rad << " [rad], accel bias "
     << f.initial.accel_bias_mps2 << " [m/s^2], gyro bias " << f.initial.gyro_bias_radps << " [rad/s], time offset "
     << f.initial.time_offset_s << " [s]\n"
+    << "  lost detection: " << (f.divergence.enabled ? "on" : "off") << ", speed > " << f.divergence.max_speed_mps
+    << " [m/s] or more than " << f.divergence.max_rejected_fraction << " of the observations rejected, for "
+    << f.divergence.window_s << " [s]\n"
     << "  static init: window " << p.static_init.window_s << " [s], accel std < " << p.static_init.max_accel_std_mps2
     << " [m/s^2], gyro std < " << p.static_init.max_gyro_std_radps << " [rad/s]\n"
     << "  tracker: detector=" << detectorName(t.detector) << " max_tracks=" << t.max_tracks

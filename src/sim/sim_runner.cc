@@ -65,12 +65,33 @@ SimRun runSimulation(const Scenario& sc, const EkfSlamConfig& config, const NavS
   const double cam_dt = 1.0 / sc.cam.rate_hz;
   int next_frame = 1;  // the first frame comes one camera period after the start
   auto frameTime = [&](int k) { return initial.timestamp + k * cam_dt; };
+  // The IMU runs on past the last image, as a recorder's does, so that an image whose stamp plus
+  // the time offset estimate is up to this much later still finds IMU data past it.
+  constexpr double kImuTailS = 0.1;
+  const double last_frame_time = traj.endTime() - kImuTailS;
   // Frames wait until the IMU reaches their stamp on the filter's IMU clock, as in the node's queue
   // (with a camera-IMU time offset the stamp is the true time minus the offset).
   std::deque<CameraFrame> pending;
+  auto processPending = [&](size_t bias_index) {
+    const CameraFrame frame = std::move(pending.front());
+    pending.pop_front();
+    FrameRecord rec;
+    const auto tic = std::chrono::steady_clock::now();
+    rec.result = filter.processFrame(frame);
+    rec.filter_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - tic).count();
+    // The truth at the time of the estimate (the stamp plus the estimated time offset).
+    rec.t = rec.result.processed ? filter.state().timestamp : frame.timestamp + sc.cam.time_offset_s;
+    rec.truth = traj.sample(std::min(rec.t, traj.endTime()));
+    rec.true_accel_bias = imu.true_accel_bias[bias_index];
+    rec.true_gyro_bias = imu.true_gyro_bias[bias_index];
+    rec.estimate = filter.navState();
+    rec.landmarks_in_state = filter.state().numLandmarks();
+    if (callback) callback(filter, rec);
+    if (keep_frames) run.frames.push_back(std::move(rec));
+  };
   for (size_t k = 0; k < imu.samples.size(); ++k) {
     if (!activeFault(sc.faults, SensorFault::Kind::kImuGap, imu.samples[k].timestamp)) filter.addImu(imu.samples[k]);
-    while (frameTime(next_frame) <= imu.samples[k].timestamp + 1e-12 && frameTime(next_frame) <= traj.endTime()) {
+    while (frameTime(next_frame) <= imu.samples[k].timestamp + 1e-12 && frameTime(next_frame) <= last_frame_time) {
       const double t = frameTime(next_frame++);
       CameraFrame frame = camera.observe(traj.sample(t), &rng);
       frame.timestamp = t - sc.cam.time_offset_s;
@@ -82,24 +103,12 @@ SimRun runSimulation(const Scenario& sc, const EkfSlamConfig& config, const NavS
       pending.push_back(std::move(frame));
     }
     while (!pending.empty() && filter.imuTime(pending.front().timestamp) <= filter.latestImuTime() + 1e-12) {
-      const CameraFrame frame = std::move(pending.front());
-      pending.pop_front();
-      FrameRecord rec;
-      const auto tic = std::chrono::steady_clock::now();
-      rec.result = filter.processFrame(frame);
-      rec.filter_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - tic).count();
-      // The truth at the time of the estimate (the stamp plus the estimated time offset).
-      rec.t = rec.result.processed ? filter.state().timestamp : frame.timestamp + sc.cam.time_offset_s;
-      rec.truth = traj.sample(std::min(rec.t, traj.endTime()));
-      const size_t bias_index = std::min(k, imu.true_accel_bias.size() - 1);
-      rec.true_accel_bias = imu.true_accel_bias[bias_index];
-      rec.true_gyro_bias = imu.true_gyro_bias[bias_index];
-      rec.estimate = filter.navState();
-      rec.landmarks_in_state = filter.state().numLandmarks();
-      if (callback) callback(filter, rec);
-      if (keep_frames) run.frames.push_back(std::move(rec));
+      processPending(std::min(k, imu.true_accel_bias.size() - 1));
     }
   }
+  // Frames the IMU no longer reaches (a time offset estimate beyond the last sample) are
+  // recorded unprocessed, so every run has the same frames.
+  while (!pending.empty()) processPending(imu.true_accel_bias.size() - 1);
   run.final_landmarks = filter.landmarks();
   return run;
 }

@@ -25,6 +25,7 @@ struct FrameResult {
   StationaryDetector::Decision stationary;  ///< the standing test of this frame
   bool zero_velocity_applied = false;       ///< stationary and the zero-velocity update passed its gate
   int deferred_features = 0;                ///< new tracks kept out of the map: rig neither seen moving nor at rest
+  std::string lost;  ///< non-empty: the filter is lost (DivergenceMonitor) and should be reset; why
 };
 
 class EkfSlam {
@@ -100,6 +101,7 @@ class EkfSlam {
   int imu_gaps_ = 0;
   int zero_velocity_updates_ = 0;
   StationaryDetector stationary_;
+  DivergenceMonitor divergence_;
   bool seen_moving_ = false;  ///< parallax reached moving_parallax_px since the last stand (or start)
 };
 

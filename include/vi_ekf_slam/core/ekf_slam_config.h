@@ -4,6 +4,7 @@
 #include <optional>
 #include <string>
 
+#include "vi_ekf_slam/core/divergence_monitor.h"
 #include "vi_ekf_slam/core/ekf_update.h"
 #include "vi_ekf_slam/core/imu_propagation.h"
 #include "vi_ekf_slam/core/landmark_initialization.h"
@@ -60,10 +61,13 @@ struct EkfSlamConfig {
   double landmark_depth_m = 8.0;         ///< fixed depth of new landmarks [m]
   double landmark_depth_sigma_m = 4.0;   ///< std-dev along the ray [m]
   double inverse_depth_initial_m = 5.0;  ///< inverse depth: prior depth 1/rho0 [m]
-  double inverse_depth_sigma = 0.3;      ///< inverse depth: prior std-dev of rho [1/m]
-  int max_landmarks = 300;               ///< map size bound
-  double landmark_timeout_s = 2.0;       ///< drop landmarks not observed for this long [s]; <0: never
-  double max_imu_gap_s = 0.1;            ///< IMU intervals longer than this are gaps [s]
+  /// inverse depth: prior std-dev of rho [1/m]. 0.5 (with 5 m) puts 95% of the prior between 0.8 m
+  /// and infinity: a hand-held rig sees desks and beds at 1 m, and a point outside the prior is
+  /// gated out once its parallax shows (0.3 made every mechanization diverge in a bedroom).
+  double inverse_depth_sigma = 0.5;
+  int max_landmarks = 300;          ///< map size bound
+  double landmark_timeout_s = 2.0;  ///< drop landmarks not observed for this long [s]; <0: never
+  double max_imu_gap_s = 0.1;       ///< IMU intervals longer than this are gaps [s]
   /// Over a gap the IMU is interpolated, and the motion it missed enters as uncertainty: an
   /// unknown acceleration and angular rate with these std-devs (a walking torso: ~3 m/s^2, 0.3 rad/s).
   double imu_gap_accel_sigma_mps2 = 3.0;
@@ -71,6 +75,7 @@ struct EkfSlamConfig {
   int imu_buffer_max = 4000;         ///< bound on buffered IMU samples
   ZeroVelocityParams zero_velocity;  ///< standing detection from parallax + zero-velocity update
   InitialUncertainty initial;
+  DivergenceParams divergence;  ///< when the filter counts as lost (FrameResult::lost)
 
   /// Empty if every value is possible, otherwise one line per problem.
   std::string validate() const;

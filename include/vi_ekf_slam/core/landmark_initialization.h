@@ -44,7 +44,7 @@ bool initializeLandmarkFixedDepth(FilterState& state, const FeatureObservation& 
 
 struct InverseDepthParams {
   double initial_depth_m = 5.0;      ///< prior mean of the depth, 1 / rho0 [m]
-  double inverse_depth_sigma = 0.3;  ///< prior std-dev of rho [1/m]
+  double inverse_depth_sigma = 0.5;  ///< prior std-dev of rho [1/m]
   double pixel_noise_px = 1.0;       ///< std-dev of the observed pixel [px]
 };
 

@@ -9,6 +9,7 @@
 #include <string>
 #include <vector>
 
+#include "vi_ekf_slam/core/measurement_model.h"
 #include "vi_ekf_slam/eval/tum_io.h"
 
 namespace vi_ekf_slam::eval {
@@ -29,6 +30,13 @@ struct ReferenceComparison {
   std::vector<Vec3> estimate;      ///< matched estimated positions
   std::vector<Vec3> reference;     ///< the reference positions aligned onto the estimate
 };
+
+/// The estimate as a reference of another frame or clock sees it: body poses moved to the camera
+/// through T_b_c (if given), and stamps moved from the IMU clock to the camera clock by each pose's
+/// time offset estimate t_d (t_image = t_imu - t_d; if given, one per pose).
+std::vector<StampedPose> referenceView(const std::vector<StampedPose>& body_poses,
+                                       const std::optional<CameraExtrinsics>& T_b_c,
+                                       const std::vector<double>* time_offsets_s = nullptr);
 
 /// Interpolates `reference` (sorted by time) at each estimate stamp (linear position, slerp),
 /// where the two reference poses around it are at most max_gap_s apart, aligns and measures.

@@ -23,6 +23,8 @@ namespace vi_ekf_slam::glue {
 /// IMU sample at stamp + nothing; nullopt if any value is NaN/Inf.
 std::optional<ImuData> fromImuMsg(const sensor_msgs::Imu& msg);
 
+/// The CameraInfo of a calibration (plumb_bob or equidistant, no rectification).
+sensor_msgs::CameraInfo toCameraInfo(const CameraIntrinsics& k, const std_msgs::Header& header);
 /// Intrinsics from a CameraInfo (plumb_bob, rational_polynomial with zero rational terms,
 /// equidistant); returns an empty string or what is wrong (all-zero K, unknown model, ...).
 std::string intrinsicsFromCameraInfo(const sensor_msgs::CameraInfo& msg, CameraIntrinsics* out);

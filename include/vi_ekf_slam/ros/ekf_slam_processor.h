@@ -34,6 +34,7 @@ struct InputCounters {
   // max_image_gap_s, images in which no feature could be tracked (camera covered, darkness), and
   // updates in which the gate rejected most observations (a burst of outlier tracks).
   long image_gaps = 0, images_without_features = 0, outlier_bursts = 0;
+  long divergences = 0;  ///< resets because the filter was lost (DivergenceMonitor)
 };
 
 /// A landmark as published: its estimate and where its track started (time, pixel), which lets
@@ -74,6 +75,8 @@ class EkfSlamProcessor {
   const NodeParams& params() const { return params_; }
   const InputCounters& counters() const { return counters_; }
   const std::string& lastProblem() const { return last_problem_; }
+  /// Why the filter was last found lost (empty if never).
+  const std::string& lastLost() const { return last_lost_; }
   const EkfSlam* filter() const { return filter_.get(); }
   int lastTracks() const { return last_tracks_; }
   double lastUpdateMs() const { return last_update_ms_; }
@@ -116,7 +119,7 @@ class EkfSlamProcessor {
   InputCounters counters_;
   int last_tracks_ = 0;
   double last_update_ms_ = 0.0, last_tracker_ms_ = 0.0, total_processing_ms_ = 0.0;
-  std::string last_problem_;
+  std::string last_problem_, last_lost_;
 };
 
 }  // namespace vi_ekf_slam::glue
