@@ -2,7 +2,7 @@
 // as the CPU allows and deterministically (messages in bag order, no threads, no master), and
 // evaluates the result against the bag's ground truth.
 //
-//   vi_ekf_slam_run_bag bag:=FILE [out:=DIR] [config:=YAML] [mechanization:=NAME|all] [plots:=false]
+//   vi_ekf_slam_run_bag bag:=FILE [out:=DIR] [config:=YAML] [rig:=YAML] [mechanization:=NAME|all] [plots:=false]
 //                       [reference:=FILE.tum[,FILE2.tum] [reference_alignment:=sim3|se3|posyaw]
 //                        [reference_frame:=body|camera] [reference_clock:=imu|camera]] [NAME:=VALUE ...]
 // (the reference_* options take one value for every file or one per file, comma-separated)
@@ -15,6 +15,7 @@
 // per image. reference:= compares with any TUM trajectory (evo-style alignment; the reference's
 // poses are of the IMU (body) or of the camera, stamped on the IMU or on the camera clock).
 // With ground truth in the bag: <run>_timeseries.csv, summary.json, summary.md (ATE, NEES, ...).
+// rig:= loads a rig file (calibration values) on top of config:= (default config/vi_ekf_slam.yaml).
 // Writes to out (default results/run_bag/<bag name>) with <run>.tum and the plots of
 // tools/plot_run.py (plots:=false to skip them).
 #include <algorithm>
@@ -362,7 +363,9 @@ int main(int argc, char** argv) {
   for (const std::string& m : mechanizations) {
     glue::YamlParams yaml = [&] {
       try {
-        return glue::YamlParams(config);
+        glue::YamlParams y(config);
+        if (args.count("rig")) y.overlay(glue::YamlParams(args["rig"]));
+        return y;
       } catch (const std::exception& e) {
         std::cerr << "error: " << e.what() << "\n";
         std::exit(1);

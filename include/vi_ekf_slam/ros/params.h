@@ -69,6 +69,10 @@ class YamlParams : public ParamSource {
  public:
   explicit YamlParams(const std::string& path);
   void set(const std::string& name, const std::string& value) { values_[name] = value; }
+  /// Takes every value of `other` (a rig file on top of the defaults).
+  void overlay(const YamlParams& other) {
+    for (const auto& [k, v] : other.values_) values_[k] = v;
+  }
   bool has(const std::string& name) const override { return values_.count(name) > 0; }
   bool get(const std::string& name, double& v) const override;
   bool get(const std::string& name, int& v) const override;
