@@ -16,7 +16,7 @@ DEVEL    := $(WS)/devel
 BIN      := $(DEVEL)/lib/vi_ekf_slam
 CATKIN   := cd $(WS) && catkin_make -j$(JOBS) -DCMAKE_BUILD_TYPE=Release -DDATA_DIR=$(DATA_DIR) -DCMAKE_EXPORT_COMPILE_COMMANDS=ON
 
-.PHONY: all deps workspace build test lint demo study bag screenshot bench soak clean help
+.PHONY: all deps workspace build test lint demo study bag screenshot bench soak realdata clean help
 
 BAG ?= results/bags/hallway.bag
 RVIZ ?= 0
@@ -45,6 +45,7 @@ help:
 	@echo "make study  - Monte-Carlo consistency study (TRAJECTORY=builtin|file.txt RUNS= SEED= OUT=)"
 	@echo "make bag    - render the hallway walk into $(BAG)"
 	@echo "make demo RVIZ=1 - the demo with rviz"
+	@echo "make realdata - the real hand-held recording (DATA_DIR/dmvio_handheld) -> results/realdata"
 	@echo "make bench  - benchmarks (core vs map size, tracker, pipeline) -> results/bench/summary.json"
 	@echo "make soak   - 30 min endurance walk per mechanization (SOAK_MINUTES=) -> results/soak"
 	@echo "make lint   - catkin_lint, clang-format check, clang-tidy on the core (part of make test)"
@@ -118,6 +119,21 @@ bench: build $(BAG)
 	  --benchmark_min_time=0.2 --benchmark_out=results/bench/google_benchmark.json --benchmark_out_format=json
 	source $(DEVEL)/setup.bash && python3 bench/pipeline.py --bag $(BAG) --config config/sim_hallway.yaml --out results/bench
 	python3 bench/summarize.py results/bench/google_benchmark.json results/bench/pipeline.json results/bench
+
+# The real hand-held recording (../shared/data/dmvio_handheld, docs/realdata.md): its ASL folder as
+# a rig bag (cached), then the node's processor offline for the three mechanizations with the
+# default configuration, and the default with the rig file; each against the SfM reference (camera
+# poses, camera clock) and OpenVINS (IMU poses, IMU clock). Tables, health and reference plots.
+REAL      := $(DATA_DIR)/dmvio_handheld
+REAL_BAG  := results/bags/dmvio_handheld.bag
+REAL_REFS := reference:=$(REAL)/reference/sfm_camera_poses.txt,$(REAL)/reference/openvins_imu_poses.txt \
+             reference_frame:=camera,body reference_clock:=camera,imu
+$(REAL_BAG): $(BIN)/vi_ekf_slam_asl_to_bag
+	@mkdir -p $(dir $@)
+	$(BIN)/vi_ekf_slam_asl_to_bag --asl $(REAL)/mav0 --out $@
+realdata: build $(REAL_BAG)
+	source $(DEVEL)/setup.bash && $(BIN)/vi_ekf_slam_run_bag bag:=$(REAL_BAG) out:=results/realdata/defaults mechanization:=all $(REAL_REFS)
+	source $(DEVEL)/setup.bash && $(BIN)/vi_ekf_slam_run_bag bag:=$(REAL_BAG) out:=results/realdata/rig rig:=config/dmvio_handheld.yaml $(REAL_REFS)
 
 # Endurance: a 30-minute walk (laps) per mechanization through the core; error, map size and
 # resident memory over time (a 4-minute version runs in make test).

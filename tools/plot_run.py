@@ -2,8 +2,13 @@
 """Plots of single runs written by vi_ekf_slam_run_bag (offline or recorded live replays).
 
 usage: plot_run.py DIR [--docs DOCS_DIR --prefix NAME]
-Writes DIR/topview.png (truth and every run, registered at the first pose), DIR/errors.png
-(position errors with +-3 sigma per run) and DIR/nees.png (pose NEES with the 95% band of 6 dof).
+Always (from health.json and <run>_trace.csv, no ground truth needed): DIR/health.png (speed, NIS
+per dof, time offset, tracks and observations over time) and, with reference:= comparisons,
+DIR/reference_topview.png (each run over its aligned reference) and DIR/reference_errors.png
+(distance to the aligned reference over time).
+With ground truth in the bag (summary.json): DIR/topview.png (truth and every run, registered at
+the first pose), DIR/errors.png (position errors with +-3 sigma per run) and DIR/nees.png (pose
+NEES with the 95% band of 6 dof).
 """
 import csv
 import json
@@ -24,11 +29,81 @@ def load(path):
     return {k: np.array([float(r[k]) for r in rows]) for k in rows[0]}
 
 
+def plot_health(out):
+    """What a run says about itself: no ground truth needed."""
+    with open(os.path.join(out, "health.json")) as f:
+        health = json.load(f)
+    runs = [k for k in health if k != "config" and os.path.exists(os.path.join(out, k + "_trace.csv"))]
+    if not runs:
+        return []
+    fig, axes = plt.subplots(4, 1, figsize=(9, 9), sharex=True)
+    t0 = None
+    for r in runs:
+        d = load(os.path.join(out, r + "_trace.csv"))
+        if len(d["t"]) < 2:
+            continue
+        t0 = d["t"][0] if t0 is None else t0
+        t = d["t"] - t0
+        step = np.linalg.norm(np.diff(np.stack([d["x"], d["y"], d["z"]], 1), axis=0), axis=1)
+        speed = step / np.maximum(np.diff(d["t"]), 1e-6)
+        axes[0].plot(t[1:], speed, lw=0.8, label=r)
+        axes[1].plot(t, d["nis_per_dof"], lw=0.6, label=r)
+        axes[2].plot(t, 1000 * d["time_offset_s"], lw=0.9, label=r)
+        axes[3].plot(t, d["tracks"], lw=0.6, label=r + " tracks")
+        axes[3].plot(t, d["accepted"], lw=0.6, ls="--", label=r + " accepted")
+        axes[3].plot(t, d["rejected"], lw=0.6, ls=":", label=r + " rejected")
+    axes[0].set_ylabel("speed [m/s]")
+    axes[0].set_yscale("symlog", linthresh=1.0)
+    axes[1].set_ylabel("NIS / dof")
+    axes[1].axhline(1.0, color="k", lw=0.6)
+    axes[2].set_ylabel("time offset [ms]")
+    axes[3].set_ylabel("per image")
+    axes[3].set_xlabel("t [s]")
+    for ax in axes:
+        ax.legend(fontsize=6)
+    fig.suptitle("health (no ground truth needed)", fontsize=10)
+    fig.tight_layout()
+    fig.savefig(os.path.join(out, "health.png"), dpi=72)
+    plt.close(fig)
+    written = ["health"]
+    refs = [(r, f) for r in runs for f in sorted(os.listdir(out)) if f.startswith(r + "_reference") and f.endswith(".csv")]
+    if refs:
+        fig, axes = plt.subplots(1, len(refs), figsize=(5.5 * len(refs), 5), squeeze=False)
+        fig2, ax2 = plt.subplots(figsize=(9, 3.2))
+        for ax, (r, f) in zip(axes[0], refs):
+            d = load(os.path.join(out, f))
+            if len(d["t"]) < 2:
+                continue
+            ax.plot(d["rx"], d["ry"], "k", lw=2.0, label="reference (aligned)")
+            ax.plot(d["ex"], d["ey"], lw=1.0, label=r)
+            ax.set_aspect("equal", adjustable="datalim")
+            ax.set_title(f, fontsize=8)
+            ax.legend(fontsize=7)
+            err = np.linalg.norm(np.stack([d["ex"] - d["rx"], d["ey"] - d["ry"], d["ez"] - d["rz"]], 1), axis=1)
+            ax2.plot(d["t"] - d["t"][0], err, lw=0.8, label=f)
+        ax2.set_xlabel("t [s]")
+        ax2.set_ylabel("distance to the aligned reference [m]")
+        ax2.legend(fontsize=6)
+        fig.tight_layout()
+        fig.savefig(os.path.join(out, "reference_topview.png"), dpi=72)
+        fig2.tight_layout()
+        fig2.savefig(os.path.join(out, "reference_errors.png"), dpi=72)
+        plt.close(fig)
+        plt.close(fig2)
+        written += ["reference_topview", "reference_errors"]
+    return written
+
+
 def main():
     if len(sys.argv) < 2:
         print(__doc__)
         return 2
     out = sys.argv[1]
+    written = plot_health(out) if os.path.exists(os.path.join(out, "health.json")) else []
+    if not os.path.exists(os.path.join(out, "summary.json")):
+        copy_docs(out, written)
+        print("plots written to", out, "(no ground truth: health and reference plots only)")
+        return 0
     with open(os.path.join(out, "summary.json")) as f:
         summary = json.load(f)
     runs = [k for k in summary if k != "config"]
@@ -73,14 +148,19 @@ def main():
     fig.tight_layout()
     fig.savefig(os.path.join(out, "nees.png"), dpi=72)
     plt.close(fig)
-    if "--docs" in sys.argv:
-        docs = sys.argv[sys.argv.index("--docs") + 1]
-        prefix = sys.argv[sys.argv.index("--prefix") + 1]
-        os.makedirs(docs, exist_ok=True)
-        for name in ("topview", "errors", "nees"):
-            shutil.copy(os.path.join(out, name + ".png"), os.path.join(docs, f"{prefix}_{name}.png"))
+    copy_docs(out, written + ["topview", "errors", "nees"])
     print("plots written to", out)
     return 0
+
+
+def copy_docs(out, names):
+    if "--docs" not in sys.argv:
+        return
+    docs = sys.argv[sys.argv.index("--docs") + 1]
+    prefix = sys.argv[sys.argv.index("--prefix") + 1]
+    os.makedirs(docs, exist_ok=True)
+    for name in names:
+        shutil.copy(os.path.join(out, name + ".png"), os.path.join(docs, f"{prefix}_{name}.png"))
 
 
 if __name__ == "__main__":

@@ -190,13 +190,15 @@ std::string healthTable(const nlohmann::json& health) {
 void writeTrace(const std::string& path, const RecordingSink& sink) {
   std::ofstream f(path);
   f << "t,x,y,z,tracks,accepted,rejected,nis_per_dof,time_offset_s,time_offset_sigma_s,resets,processing_ms,"
-       "tracker_ms\n"
+       "tracker_ms,landmarks,new_landmarks,deferred,removed,stationary\n"
     << std::setprecision(12);
   for (const auto& r : sink.trace) {
     const auto& s = r.status;
     f << r.t << "," << r.p.x() << "," << r.p.y() << "," << r.p.z() << "," << s.tracks << "," << s.accepted_observations
       << "," << s.rejected_observations << "," << s.nis_per_dof << "," << s.time_offset_s << ","
-      << s.time_offset_sigma_s << "," << s.resets << "," << s.update_time_ms << "," << s.tracker_time_ms << "\n";
+      << s.time_offset_sigma_s << "," << s.resets << "," << s.update_time_ms << "," << s.tracker_time_ms << ","
+      << s.landmarks_in_state << "," << s.new_landmarks << "," << s.deferred_features << "," << s.removed_landmarks
+      << "," << static_cast<int>(s.stationary) << "\n";
   }
 }
 

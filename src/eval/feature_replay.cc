@@ -54,7 +54,8 @@ FeatureReplayResult replayFeatures(const FeatureTrackData& data, const std::vect
   while (f < data.frames.size() && data.frames[f].timestamp <= out.init_time) ++f;
   for (; k < data.imu.size(); ++k) {
     filter.addImu(data.imu[k]);
-    while (f < data.frames.size() && data.frames[f].timestamp <= data.imu[k].timestamp) {
+    // A frame is processed once the IMU reaches its stamp on the IMU clock (stamp + time offset).
+    while (f < data.frames.size() && filter.imuTime(data.frames[f].timestamp) <= data.imu[k].timestamp) {
       const auto tic = std::chrono::steady_clock::now();
       const FrameResult r = filter.processFrame(data.frames[f++]);
       const double ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - tic).count();

@@ -6,6 +6,7 @@
 #include <fstream>
 #include <iomanip>
 #include <map>
+#include <optional>
 #include <sstream>
 
 #include "vi_ekf_slam/core/chi_squared.h"
@@ -14,11 +15,23 @@ namespace vi_ekf_slam::eval {
 
 namespace {
 
-const StampedPose* truthAt(const std::vector<StampedPose>& truth, double t) {
-  auto it =
-      std::lower_bound(truth.begin(), truth.end(), t - 1e-3, [](const StampedPose& p, double x) { return p.t < x; });
-  if (it == truth.end() || std::abs(it->t - t) > 1e-3) return nullptr;
-  return &*it;
+/// The truth at time t: interpolated (linear position, slerp) between the two truth poses around
+/// it when they are at most 0.2 s apart, exact when a stamp agrees within 1 us. The estimates are
+/// stamped at the state's time (image stamp + estimated time offset), which need not be a truth
+/// stamp.
+std::optional<StampedPose> truthAt(const std::vector<StampedPose>& truth, double t) {
+  auto it = std::lower_bound(truth.begin(), truth.end(), t, [](const StampedPose& p, double x) { return p.t < x; });
+  if (it != truth.end() && it->t - t < 1e-6) return *it;
+  if (it != truth.begin() && it != truth.end() && (it - 1)->t > t - 1e-6) return *(it - 1);
+  if (it == truth.begin() || it == truth.end() || it->t - (it - 1)->t > 0.2) return std::nullopt;
+  const StampedPose& a = *(it - 1);
+  const StampedPose& b = *it;
+  const double alpha = (t - a.t) / (b.t - a.t);
+  StampedPose p;
+  p.t = t;
+  p.p = (1.0 - alpha) * a.p + alpha * b.p;
+  p.q = a.q.slerp(alpha, b.q);
+  return p;
 }
 
 double yawOf(const Quat& q) {
@@ -42,7 +55,7 @@ RunMetrics evaluateRun(const std::vector<EstimatedPose>& est, const std::vector<
   size_t first = 0;
   while (first < est.size() && !truthAt(truth, est[first].t)) ++first;
   if (first == est.size()) return m;
-  const StampedPose* g0 = truthAt(truth, est[first].t);
+  const std::optional<StampedPose> g0 = truthAt(truth, est[first].t);
   const double dyaw = yawOf(g0->q) - yawOf(est[first].q);
   const Quat R(Eigen::AngleAxisd(dyaw, Vec3::UnitZ()));
   const Vec3 T = g0->p - R * est[first].p;
@@ -54,7 +67,7 @@ RunMetrics evaluateRun(const std::vector<EstimatedPose>& est, const std::vector<
   std::vector<double> q_deg, np, nq, npose, ms, tracker_ms;
   int inside = 0;
   for (size_t i = first; i < est.size(); ++i) {
-    const StampedPose* g = truthAt(truth, est[i].t);
+    const std::optional<StampedPose> g = truthAt(truth, est[i].t);
     if (!g) continue;
     RunFrame f;
     f.t = est[i].t;

@@ -16,6 +16,8 @@
 #include <dynamic_reconfigure/client.h>
 #include <geometry_msgs/PoseStamped.h>
 #include <gtest/gtest.h>
+
+#include <optional>
 #include <nav_msgs/Odometry.h>
 #include <ros/ros.h>
 #include <sensor_msgs/PointCloud2.h>
@@ -176,17 +178,28 @@ TEST(FilterNode, BehavesOnThisInputStream) {
   }
 
   if (max_err > 0 && !rec.odom.empty()) {
-    auto truthAt = [&](double t) -> const geometry_msgs::PoseStamped* {
-      auto it = rec.truth.lower_bound(t - 1e-4);
-      return (it != rec.truth.end() && std::abs(it->first - t) < 1e-3) ? &it->second : nullptr;
+    // The truth at an odometry stamp (the state's time: image stamp + estimated time offset),
+    // position interpolated between the truth poses around it, orientation of the nearer one.
+    auto truthAt = [&](double t) -> std::optional<geometry_msgs::PoseStamped> {
+      auto b = rec.truth.lower_bound(t);
+      if (b != rec.truth.end() && b->first - t < 1e-6) return b->second;
+      if (b == rec.truth.begin() || b == rec.truth.end()) return std::nullopt;
+      auto a = std::prev(b);
+      if (b->first - a->first > 0.2) return std::nullopt;
+      const double alpha = (t - a->first) / (b->first - a->first);
+      geometry_msgs::PoseStamped p = alpha < 0.5 ? a->second : b->second;
+      p.pose.position.x = (1 - alpha) * a->second.pose.position.x + alpha * b->second.pose.position.x;
+      p.pose.position.y = (1 - alpha) * a->second.pose.position.y + alpha * b->second.pose.position.y;
+      p.pose.position.z = (1 - alpha) * a->second.pose.position.z + alpha * b->second.pose.position.z;
+      return p;
     };
     // Align at the first odometry after the last reset (resets restart the world frame).
     size_t first = 0;
     for (size_t i = 1; i < rec.odom.size(); ++i) {
       if (rec.odom[i].header.stamp < rec.odom[i - 1].header.stamp) first = i;
     }
-    const auto* g0 = truthAt(rec.odom[first].header.stamp.toSec());
-    const auto* g1 = truthAt(rec.odom.back().header.stamp.toSec());
+    const auto g0 = truthAt(rec.odom[first].header.stamp.toSec());
+    const auto g1 = truthAt(rec.odom.back().header.stamp.toSec());
     ASSERT_TRUE(g0 && g1) << "no ground truth at the odometry stamps";
     const double dyaw = yawOf(g0->pose.orientation) - yawOf(rec.odom[first].pose.pose.orientation);
     const Eigen::Matrix3d R = Eigen::AngleAxisd(dyaw, Eigen::Vector3d::UnitZ()).toRotationMatrix();
