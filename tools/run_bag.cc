@@ -421,6 +421,12 @@ int main(int argc, char** argv) {
       const Reference& ref = references[k];
       nlohmann::json j = {
           {"file", ref.path}, {"frame", ref.frame}, {"clock", ref.clock}, {"alignment", eval::toString(ref.alignment)}};
+      if (sink.poses.empty()) {
+        std::printf("  against %s: no pose since the last reset (lost, not re-initialized)\n", ref.path.c_str());
+        j["error"] = "no pose since the last reset";
+        comparisons.push_back(j);
+        continue;
+      }
       try {
         const eval::ReferenceComparison c =
             eval::compareWithReference(referenceView(sink, info, ref.frame, ref.clock), ref.poses, ref.alignment);
