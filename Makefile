@@ -113,11 +113,12 @@ study: build
 # Benchmarks (numbers, not pass/fail), pinned to one core: core operations against the map size
 # with fitted growth exponents, the tracker on rendered and real frames, the offline pipeline's
 # real-time factor and the live replay's latency. Table in bench/README.md.
-bench: build $(BAG)
+bench: build $(BAG) $(if $(wildcard $(DATA_DIR)/dmvio_handheld/mav0),results/bags/dmvio_handheld.bag)
 	@mkdir -p results/bench
 	taskset -c 0 $(BIN)/vi_ekf_slam_bench --benchmark_repetitions=3 --benchmark_report_aggregates_only=true \
 	  --benchmark_min_time=0.2 --benchmark_out=results/bench/google_benchmark.json --benchmark_out_format=json
-	source $(DEVEL)/setup.bash && python3 bench/pipeline.py --bag $(BAG) --config config/sim_hallway.yaml --out results/bench
+	source $(DEVEL)/setup.bash && python3 bench/pipeline.py --bag $(BAG) --config config/sim_hallway.yaml --out results/bench \
+	  $(if $(wildcard $(REAL)/mav0),--real-bag $(REAL_BAG))
 	python3 bench/summarize.py results/bench/google_benchmark.json results/bench/pipeline.json results/bench
 
 # The real hand-held recording (../shared/data/dmvio_handheld, docs/realdata.md): its ASL folder as

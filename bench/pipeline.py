@@ -2,12 +2,14 @@
 """Whole-pipeline numbers for `make bench` (issue 6):
   - offline: vi_ekf_slam_run_bag on the hallway bag pinned to one core (taskset), its real-time
     factor and filter+tracker time per frame;
+  - offline on a real 1280x720 recording (--real-bag, the make realdata bag), pinned to one core:
+    real-time factor, time per image and its tracking share (from health.json: no ground truth);
   - live: one `rosbag play` replay through the nodelet (tools/demo.py's replay), and the latency
     of every published odometry message: the time the recorder received it minus its stamp (the
     image time). rosbag play drives /clock at 100 Hz, so single values are quantized to 10 ms;
     the median and 99th percentile over ~1000 frames are still meaningful.
 
-usage: pipeline.py --bag BAG --config YAML --out DIR   (writes DIR/pipeline.json)
+usage: pipeline.py --bag BAG --config YAML --out DIR [--real-bag BAG]   (writes DIR/pipeline.json)
 """
 import argparse
 import json
@@ -36,24 +38,34 @@ def odom_latency_ms(bag_path, topic="/vi_ekf_slam/odom"):
     return lat
 
 
+def offline(bag, out, summary_file, extra=()):
+    """vi_ekf_slam_run_bag on one core; the default mechanization's entry of its summary file."""
+    subprocess.run(["taskset", "-c", "0", "rosrun", "vi_ekf_slam", "vi_ekf_slam_run_bag", "bag:=" + bag,
+                    "mechanization:=" + MECH, "out:=" + out, "plots:=false"] + list(extra),
+                   check=True, stdout=subprocess.DEVNULL)
+    with open(os.path.join(out, summary_file)) as f:
+        return json.load(f)[MECH]
+
+
 def main():
     ap = argparse.ArgumentParser()
     ap.add_argument("--bag", required=True)
     ap.add_argument("--config", required=True)
     ap.add_argument("--out", required=True)
+    ap.add_argument("--real-bag", default="")
     a = ap.parse_args()
     os.makedirs(a.out, exist_ok=True)
     result = {}
-    off = os.path.join(a.out, "offline")
-    subprocess.run(["taskset", "-c", "0", "rosrun", "vi_ekf_slam", "vi_ekf_slam_run_bag", "bag:=" + a.bag,
-                    "config:=" + a.config, "mechanization:=" + MECH, "out:=" + off, "plots:=false"],
-                   check=True, stdout=subprocess.DEVNULL)
-    with open(os.path.join(off, "summary.json")) as f:
-        s = json.load(f)[MECH]
+    s = offline(a.bag, os.path.join(a.out, "offline"), "summary.json", ["config:=" + a.config])
     result["offline_real_time_factor_1core"] = round(s["real_time_factor"], 2)
     result["offline_ms_per_frame_mean"] = round(s["processing_ms_mean"], 2)
     result["offline_ms_per_frame_p95"] = round(s["processing_ms_p95"], 2)
     result["offline_tracker_ms_per_frame"] = round(s["tracker_ms_mean"], 2)
+    if a.real_bag:
+        h = offline(a.real_bag, os.path.join(a.out, "offline_real"), "health.json")
+        result["real_1280x720_real_time_factor_1core"] = round(h["real_time_factor"], 2)
+        result["real_1280x720_ms_per_image_mean"] = round(h["processing_ms_mean"], 2)
+        result["real_1280x720_tracker_ms_per_image"] = round(h["tracker_ms_mean"], 2)
     with open(os.path.join(a.out, "roslaunch.log"), "w") as log:
         rec = replay(os.path.abspath(a.bag), MECH, a.out, os.path.abspath(a.config), False, 1.0, log)
     lat = odom_latency_ms(rec)
