@@ -181,11 +181,17 @@ TEST(FilterNode, BehavesOnThisInputStream) {
     // The truth at an odometry stamp (the state's time: image stamp + estimated time offset),
     // position interpolated between the truth poses around it, orientation of the nearer one.
     auto truthAt = [&](double t) -> std::optional<geometry_msgs::PoseStamped> {
+      if (rec.truth.empty()) return std::nullopt;
       auto b = rec.truth.lower_bound(t);
       if (b != rec.truth.end() && b->first - t < 1e-6) return b->second;
-      if (b == rec.truth.begin() || b == rec.truth.end()) return std::nullopt;
+      // Just outside the truth's span (the offset estimate moved the stamp past an end): the end.
+      if (b == rec.truth.begin()) return b->first - t < 0.1 ? std::optional(b->second) : std::nullopt;
+      if (b == rec.truth.end()) {
+        const auto& last = *rec.truth.rbegin();
+        return t - last.first < 0.1 ? std::optional(last.second) : std::nullopt;
+      }
       auto a = std::prev(b);
-      if (b->first - a->first > 0.2) return std::nullopt;
+      if (b->first - a->first > 0.5) return std::nullopt;
       const double alpha = (t - a->first) / (b->first - a->first);
       geometry_msgs::PoseStamped p = alpha < 0.5 ? a->second : b->second;
       p.pose.position.x = (1 - alpha) * a->second.pose.position.x + alpha * b->second.pose.position.x;
