@@ -57,19 +57,13 @@ ReferenceComparison compareWithReference(const std::vector<StampedPose>& estimat
   std::vector<Vec3> p_ref;
   std::vector<Quat> q_ref, q_est;
   for (const auto& e : estimate) {
-    const auto it = std::lower_bound(reference.begin(), reference.end(), e.t,
-                                     [](const StampedPose& r, double t) { return r.t < t; });
-    if (it == reference.end()) continue;
-    // it->t >= e.t: interpolate between the pose before and it (or take it if the stamps agree).
-    const StampedPose& b = *it;
-    const StampedPose& a = (it == reference.begin() || b.t - e.t < 1e-6) ? b : *(it - 1);
-    if (b.t - a.t > max_gap_s || (&a == &b && b.t - e.t >= 1e-6)) continue;
-    const double alpha = b.t > a.t ? (e.t - a.t) / (b.t - a.t) : 0.0;
+    const std::optional<StampedPose> r = interpolatePose(reference, e.t, max_gap_s);
+    if (!r) continue;
     out.t.push_back(e.t);
     out.estimate.push_back(e.p);
     q_est.push_back(e.q);
-    p_ref.push_back((1.0 - alpha) * a.p + alpha * b.p);
-    q_ref.push_back(a.q.slerp(alpha, b.q));
+    p_ref.push_back(r->p);
+    q_ref.push_back(r->q);
   }
   out.matched = static_cast<int>(out.t.size());
   if (out.matched < 3) {

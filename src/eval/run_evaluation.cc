@@ -15,23 +15,10 @@ namespace vi_ekf_slam::eval {
 
 namespace {
 
-/// The truth at time t: interpolated (linear position, slerp) between the two truth poses around
-/// it when they are at most 0.2 s apart, exact when a stamp agrees within 1 us. The estimates are
-/// stamped at the state's time (image stamp + estimated time offset), which need not be a truth
-/// stamp.
+/// The truth at time t (interpolated within 0.2 s): the estimates are stamped at the state's time
+/// (image stamp + estimated time offset), which need not be a truth stamp.
 std::optional<StampedPose> truthAt(const std::vector<StampedPose>& truth, double t) {
-  auto it = std::lower_bound(truth.begin(), truth.end(), t, [](const StampedPose& p, double x) { return p.t < x; });
-  if (it != truth.end() && it->t - t < 1e-6) return *it;
-  if (it != truth.begin() && it != truth.end() && (it - 1)->t > t - 1e-6) return *(it - 1);
-  if (it == truth.begin() || it == truth.end() || it->t - (it - 1)->t > 0.2) return std::nullopt;
-  const StampedPose& a = *(it - 1);
-  const StampedPose& b = *it;
-  const double alpha = (t - a.t) / (b.t - a.t);
-  StampedPose p;
-  p.t = t;
-  p.p = (1.0 - alpha) * a.p + alpha * b.p;
-  p.q = a.q.slerp(alpha, b.q);
-  return p;
+  return interpolatePose(truth, t, 0.2);
 }
 
 double yawOf(const Quat& q) {

@@ -1,5 +1,6 @@
 #include "vi_ekf_slam/eval/tum_io.h"
 
+#include <algorithm>
 #include <cmath>
 #include <fstream>
 #include <iomanip>
@@ -75,6 +76,21 @@ void writeTum(const std::string& path, const std::vector<StampedPose>& poses, co
     }
     out << "\n";
   }
+}
+
+std::optional<StampedPose> interpolatePose(const std::vector<StampedPose>& poses, double t, double max_gap_s) {
+  auto it = std::lower_bound(poses.begin(), poses.end(), t, [](const StampedPose& p, double x) { return p.t < x; });
+  if (it != poses.end() && it->t - t < 1e-6) return *it;
+  if (it != poses.begin() && it != poses.end() && (it - 1)->t > t - 1e-6) return *(it - 1);
+  if (it == poses.begin() || it == poses.end() || it->t - (it - 1)->t > max_gap_s) return std::nullopt;
+  const StampedPose& a = *(it - 1);
+  const StampedPose& b = *it;
+  const double alpha = (t - a.t) / (b.t - a.t);
+  StampedPose p;
+  p.t = t;
+  p.p = (1.0 - alpha) * a.p + alpha * b.p;
+  p.q = a.q.slerp(alpha, b.q);
+  return p;
 }
 
 }  // namespace vi_ekf_slam::eval

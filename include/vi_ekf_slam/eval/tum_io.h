@@ -23,6 +23,11 @@ struct StampedPose {
 /// (wrong column count, non-numbers, non-finite values, zero quaternion, non-increasing time).
 std::vector<StampedPose> readTum(const std::string& path);
 
+/// The pose of a time-sorted sequence at time t: a pose whose stamp agrees within 1 us, else
+/// interpolated (linear position, slerp) between the two poses around t if they are at most
+/// max_gap_s apart; nullopt outside the sequence or across a longer gap.
+std::optional<StampedPose> interpolatePose(const std::vector<StampedPose>& poses, double t, double max_gap_s);
+
 /// Writes poses (with the covariance columns when every pose has one).
 void writeTum(const std::string& path, const std::vector<StampedPose>& poses, const std::string& header = "");
 
