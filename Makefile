@@ -16,7 +16,7 @@ DEVEL    := $(WS)/devel
 BIN      := $(DEVEL)/lib/vi_ekf_slam
 CATKIN   := cd $(WS) && catkin_make -j$(JOBS) -DCMAKE_BUILD_TYPE=Release -DDATA_DIR=$(DATA_DIR) -DCMAKE_EXPORT_COMPILE_COMMANDS=ON
 
-.PHONY: all deps workspace build test lint demo study bag screenshot bench soak realdata clean help
+.PHONY: all deps workspace build test lint demo study suite bag screenshot bench soak realdata clean help
 
 BAG ?= results/bags/hallway.bag
 RVIZ ?= 0
@@ -45,6 +45,7 @@ help:
 	@echo "make study  - Monte-Carlo consistency study (TRAJECTORY=builtin|file.txt RUNS= SEED= OUT=)"
 	@echo "make bag    - render the hallway walk into $(BAG)"
 	@echo "make demo RVIZ=1 - the demo with rviz"
+	@echo "make suite  - the study over every trajectory in windows + generated walks, one table with worst cases -> results/suite"
 	@echo "make realdata - the real hand-held recording (DATA_DIR/dmvio_handheld) -> results/realdata"
 	@echo "make bench  - benchmarks (core vs map size, tracker, pipeline) -> results/bench/summary.json"
 	@echo "make soak   - 30 min endurance walk per mechanization (SOAK_MINUTES=) -> results/soak"
@@ -120,6 +121,17 @@ bench: build $(BAG) $(if $(wildcard $(DATA_DIR)/dmvio_handheld/mav0),results/bag
 	source $(DEVEL)/setup.bash && python3 bench/pipeline.py --bag $(BAG) --config config/sim_hallway.yaml --out results/bench \
 	  $(if $(wildcard $(REAL)/mav0),--real-bag $(REAL_BAG))
 	python3 bench/summarize.py results/bench/google_benchmark.json results/bench/pipeline.json results/bench
+
+# The suite (docs/suite.md): the study with the same seeds over the built-in walk, every
+# trajectory in DATA_DIR/trajectories (120 s windows) and the walks of tools/make_walks.py; one
+# table per case and configuration plus the worst case of each configuration.
+#   make suite [SUITE_RUNS=8] [SEED=1] [SUITE_CONFIGS=a,b] [SUITE_OUT=results/suite] [STUDY_ARGS=...]
+SUITE_RUNS    ?= 8
+SUITE_OUT     ?= results/suite
+SUITE_CONFIGS ?=
+suite: build
+	python3 tools/suite.py --study $(BIN)/vi_ekf_slam_study --data $(DATA_DIR) --out $(SUITE_OUT) --runs $(SUITE_RUNS) \
+	  --seed $(SEED) --threads $(JOBS) $(if $(SUITE_CONFIGS),--configs $(SUITE_CONFIGS)) $(if $(STUDY_ARGS),-- $(STUDY_ARGS))
 
 # The real hand-held recording (../shared/data/dmvio_handheld, docs/realdata.md): its ASL folder as
 # a rig bag (cached), then the node's processor offline for the three mechanizations with the

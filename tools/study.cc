@@ -4,9 +4,10 @@
 //
 //   vi_ekf_slam_study --trajectory builtin|FILE --runs 50 --seed 1 --out results/study
 //                     [--configs paper|all|name,name,...] [--threads N] [--density 1.0]
+//                     ("default": the node's default configuration, whatever it is at the time)
 //                     [--per-metre 15] [--start-offset S] [--max-duration S] [--max-landmarks N]
 //                     [--imu ASL_IMU_CSV] [--imu-noise datasheet|euroc_mav] [--preset openvins_sim]
-//                     [--inverse-depth INITIAL_DEPTH_M,SIGMA_PER_M]
+//                     [--inverse-depth INITIAL_DEPTH_M,SIGMA_PER_M] [--update-iterations N]
 //
 // --preset openvins_sim: OpenVINS's simulator setup on a TUM file (sim/openvins_preset.h).
 // --start-offset / --max-duration: a time window of the trajectory (e.g. start while walking).
@@ -60,10 +61,12 @@ struct Options {
   // landmarks in every configuration (default: the core's).
   std::string inverse_depth;
   double inverse_depth_initial_m = 0.0, inverse_depth_sigma = 0.0;
-  double gate = 0.0;  // chi^2 gate probability of every configuration; 0: the core's default
+  double gate = 0.0;          // chi^2 gate probability of every configuration; 0: the core's default
+  int update_iterations = 0;  // linearizations per update of every configuration; 0: the core's default
   // +zero_velocity: "wait" (the core's default): new landmarks wait until the standing detector
   // sees the rig move, unless the IMU shows rest; "immediate": whenever a track is new.
   std::string new_landmarks = "wait";
+  bool new_landmarks_given = false;  // "default" keeps the core's choice unless told
 };
 
 [[noreturn]] void usage(const std::string& err) {
@@ -73,7 +76,8 @@ struct Options {
                "       [--start-offset S] [--max-duration S] [--max-landmarks N] [--start truth|prior]\n"
                "       [--imu ASL_IMU_CSV] [--imu-noise datasheet|euroc_mav] [--preset openvins_sim]\n"
                "       [--gate P] (chi^2 gate probability of every configuration)\n"
-               "       [--new-landmarks wait|immediate] (+zero_velocity: while the rig is not seen moving)\n";
+               "       [--new-landmarks wait|immediate] (+zero_velocity: while the rig is not seen moving)\n"
+               "       [--update-iterations N] (1: EKF, more: iterated EKF update, every configuration)\n";
   std::exit(2);
 }
 
@@ -116,8 +120,11 @@ Options parse(int argc, char** argv) {
         o.start = v;
       else if (k == "--gate")
         o.gate = std::stod(v);
-      else if (k == "--new-landmarks")
+      else if (k == "--new-landmarks") {
         o.new_landmarks = v;
+        o.new_landmarks_given = true;
+      } else if (k == "--update-iterations")
+        o.update_iterations = std::stoi(v);
       else if (k == "--inverse-depth")
         o.inverse_depth = v;
       else
@@ -126,6 +133,7 @@ Options parse(int argc, char** argv) {
       usage("bad value '" + v + "' for " + k);
     }
   }
+  if (o.update_iterations < 0 || o.update_iterations > 20) usage("--update-iterations must be in [1, 20]");
   if (o.runs < 2) usage("--runs must be >= 2 (NEES bands need several runs)");
   if (o.threads < 1) usage("--threads must be >= 1");
   if (o.max_landmarks < 0) usage("--max-landmarks must be >= 1 (0: the default)");
@@ -180,6 +188,7 @@ std::vector<std::pair<std::string, EkfSlamConfig>> makeConfigs(const Options& o,
       c.inverse_depth_sigma = o.inverse_depth_sigma;
     }
     c.zero_velocity.defer_landmarks = o.new_landmarks == "wait";
+    if (o.update_iterations > 0) c.update.iterations = o.update_iterations;
     // The recorded IMU is EuRoC's MAV: standing on the ground it does not sway like a pedestrian.
     if (!o.imu.empty()) c.zero_velocity.velocity_sigma_mps = eval::kEurocMavStandingVelocitySigma;
     if (gate > 0.0)
@@ -213,6 +222,25 @@ std::vector<std::pair<std::string, EkfSlamConfig>> makeConfigs(const Options& o,
   // The same with the chi^2 gate of an outlier-free front end: the simulator has no outliers, so
   // the 95% gate only drops the 5% of correct observations that would correct the largest errors.
   add(Mechanization::kSensorCentricComposition, inv, every, true, kOutlierFreeGate);
+  // The node's default as it is (EkfSlamConfig{}, which test/ros/test_params.cc keeps equal to
+  // config/vi_ekf_slam.yaml), told only what a rig's calibration would tell it: the sensors'
+  // noise, and the options given to every configuration.
+  {
+    EkfSlamConfig c;
+    c.imu_noise = sc.imu.noise;
+    c.update.pixel_noise_px = sc.cam.pixel_noise_px;
+    if (o.preset == "openvins_sim") c.initial = sim::openvinsSimInitialUncertainty();
+    if (o.max_landmarks > 0) c.max_landmarks = o.max_landmarks;
+    if (!o.inverse_depth.empty()) {
+      c.inverse_depth_initial_m = o.inverse_depth_initial_m;
+      c.inverse_depth_sigma = o.inverse_depth_sigma;
+    }
+    if (o.new_landmarks_given) c.zero_velocity.defer_landmarks = o.new_landmarks == "wait";
+    if (!o.imu.empty()) c.zero_velocity.velocity_sigma_mps = eval::kEurocMavStandingVelocitySigma;
+    if (o.gate > 0.0) c.update.gate_probability = o.gate;
+    if (o.update_iterations > 0) c.update.iterations = o.update_iterations;
+    all.emplace_back("default", c);
+  }
   if (o.configs == "all") return all;
   std::vector<std::pair<std::string, EkfSlamConfig>> chosen;
   std::stringstream ss(o.configs);

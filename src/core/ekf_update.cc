@@ -1,6 +1,7 @@
 #include "vi_ekf_slam/core/ekf_update.h"
 
 #include <Eigen/Cholesky>
+#include <algorithm>
 #include <cmath>
 
 #include "vi_ekf_slam/core/chi_squared.h"
@@ -13,9 +14,13 @@ struct AcceptedObservation {
   std::int64_t id;
   int col;  ///< landmark column in the error state
   ObservationJacobians J;
-  Eigen::Vector2d H_td;  ///< w.r.t. the time offset: the feature's image velocity [px/s]
-  Eigen::Vector2d residual;
+  Eigen::Vector2d H_td;      ///< w.r.t. the time offset: the feature's image velocity [px/s]
+  Eigen::Vector2d residual;  ///< measured - h(x) at the current linearization point [px]
+  Eigen::Vector2d measured;  ///< [px]
 };
+/// The iterations stop once the correction changes less than this (max over its entries: m,
+/// rad, m/s, 1/m, s).
+constexpr double kIterationTolerance = 1e-6;
 }  // namespace
 
 UpdateResult ekfUpdate(FilterState& state, const std::vector<FeatureObservation>& observations,
@@ -40,6 +45,7 @@ UpdateResult ekfUpdate(FilterState& state, const std::vector<FeatureObservation>
     a.id = obs.id;
     a.col = state.landmarkIndex(*li);
     a.residual = obs.uv - uv;
+    a.measured = obs.uv;
     const int blocks[3] = {idx::kP, idx::kPsi, a.col};
     const Eigen::Matrix<double, 9, 9> Psub = gatherBlocks<3>(P0, blocks);
     Eigen::Matrix<double, 2, 9> Hsub;
@@ -62,40 +68,82 @@ UpdateResult ekfUpdate(FilterState& state, const std::vector<FeatureObservation>
   result.accepted = static_cast<int>(acc.size());
   if (acc.empty()) return result;
 
-  // 2) Stacked update. H has 9 non-zero columns per observation, so P H^T and H P H^T are
-  //    assembled block-wise in O(n m) instead of forming H.
+  // 2) Stacked update, iterated (Gauss-Newton on the prior and the accepted observations): each
+  //    pass relinearizes h at the current iterate x_i = x_0 [+] d_i and solves
+  //    d_{i+1} = K_i (z - h(x_i) + H_i d_i), K_i = P_0 H_i^T (H_i P_0 H_i^T + R)^-1. A new
+  //    landmark's first observations depend on the product of its inverse depth and the camera's
+  //    motion, both poorly known: one linearization at the prior depth misplaces the correction
+  //    between them (false confidence in the velocity); relinearizing at the corrected depth does
+  //    not. The covariance is updated once, with the last K and H. H has 9 non-zero columns per
+  //    observation, so P H^T and H P H^T are assembled block-wise in O(n m) instead of forming H.
   Eigen::MatrixXd& P = state.mutableCovariance();
   const int n = state.dim();
   const int m = 2 * result.accepted;
-  Eigen::MatrixXd PHt(n, m);
-  Eigen::VectorXd r(m);
-  for (int j = 0; j < result.accepted; ++j) {
-    const auto& a = acc[static_cast<size_t>(j)];
-    PHt.middleCols<2>(2 * j).noalias() = P.middleCols<3>(idx::kP) * a.J.H_p.transpose();
-    PHt.middleCols<2>(2 * j).noalias() += P.middleCols<3>(idx::kPsi) * a.J.H_psi.transpose();
-    PHt.middleCols<2>(2 * j).noalias() += P.middleCols<3>(a.col) * a.J.H_l.transpose();
-    PHt.middleCols<2>(2 * j).noalias() += P.col(idx::kTd) * a.H_td.transpose();
-    r.segment<2>(2 * j) = a.residual;
+  const MotionState x0 = state.x;
+  const std::vector<Landmark> l0 = state.landmarks();
+  Eigen::MatrixXd PHt(n, m), S(m, m), K;
+  Eigen::VectorXd r(m), d = Eigen::VectorXd::Zero(n);
+  Eigen::LLT<Eigen::MatrixXd> llt;
+  const int iterations = std::max(1, params.iterations);
+  for (int it = 0; it < iterations; ++it) {
+    if (it > 0) {
+      // Relinearize at x_i; an observation that can no longer be predicted ends the iterations
+      // at the previous iterate (whose K is kept).
+      state.x = x0;
+      for (int i = 0; i < state.numLandmarks(); ++i) state.landmark(i) = l0[static_cast<size_t>(i)];
+      state.boxplus(d);
+      bool ok = true;
+      std::vector<AcceptedObservation> next = acc;
+      for (auto& a : next) {
+        const auto li = state.findLandmark(a.id);
+        Eigen::Vector2d uv;
+        if (!li || !predictObservation(state.x, state.landmark(*li), camera, T_b_c, &uv, &a.J)) {
+          ok = false;
+          break;
+        }
+        a.residual = a.measured - uv;
+        if (!predictImageVelocity(state.x, state.landmark(*li), camera, T_b_c, omega_b, &a.H_td)) a.H_td.setZero();
+      }
+      if (!ok) break;
+      acc = std::move(next);
+    }
+    Eigen::VectorXd Hd(m);
+    for (int j = 0; j < result.accepted; ++j) {
+      const auto& a = acc[static_cast<size_t>(j)];
+      PHt.middleCols<2>(2 * j).noalias() = P.middleCols<3>(idx::kP) * a.J.H_p.transpose();
+      PHt.middleCols<2>(2 * j).noalias() += P.middleCols<3>(idx::kPsi) * a.J.H_psi.transpose();
+      PHt.middleCols<2>(2 * j).noalias() += P.middleCols<3>(a.col) * a.J.H_l.transpose();
+      PHt.middleCols<2>(2 * j).noalias() += P.col(idx::kTd) * a.H_td.transpose();
+      r.segment<2>(2 * j) = a.residual;
+      Hd.segment<2>(2 * j) = a.J.H_p * d.segment<3>(idx::kP) + a.J.H_psi * d.segment<3>(idx::kPsi) +
+                             a.J.H_l * d.segment<3>(a.col) + a.H_td * d(idx::kTd);
+    }
+    for (int i = 0; i < result.accepted; ++i) {
+      const auto& a = acc[static_cast<size_t>(i)];
+      S.middleRows<2>(2 * i).noalias() = a.J.H_p * PHt.middleRows<3>(idx::kP);
+      S.middleRows<2>(2 * i).noalias() += a.J.H_psi * PHt.middleRows<3>(idx::kPsi);
+      S.middleRows<2>(2 * i).noalias() += a.J.H_l * PHt.middleRows<3>(a.col);
+      S.middleRows<2>(2 * i).noalias() += a.H_td * PHt.row(idx::kTd);
+    }
+    S.diagonal().array() += r_var;
+    symmetrize(S);
+    llt.compute(S);
+    if (llt.info() != Eigen::Success) {  // numerically broken P: refuse rather than corrupt it
+      state.x = x0;
+      for (int i = 0; i < state.numLandmarks(); ++i) state.landmark(i) = l0[static_cast<size_t>(i)];
+      for (const auto& a : acc) result.invalid_ids.push_back(a.id);
+      result.accepted = 0;
+      return result;
+    }
+    K = llt.solve(PHt.transpose()).transpose();  // P H^T S^-1
+    const Eigen::VectorXd d_next = K * (r + Hd);
+    const double change = (d_next - d).lpNorm<Eigen::Infinity>();
+    d = d_next;
+    if (it == 0) result.nis_sum = r.dot(llt.solve(r));  // of the prior's prediction, as gated
+    if (change < kIterationTolerance) break;
   }
-  Eigen::MatrixXd S(m, m);
-  for (int i = 0; i < result.accepted; ++i) {
-    const auto& a = acc[static_cast<size_t>(i)];
-    S.middleRows<2>(2 * i).noalias() = a.J.H_p * PHt.middleRows<3>(idx::kP);
-    S.middleRows<2>(2 * i).noalias() += a.J.H_psi * PHt.middleRows<3>(idx::kPsi);
-    S.middleRows<2>(2 * i).noalias() += a.J.H_l * PHt.middleRows<3>(a.col);
-    S.middleRows<2>(2 * i).noalias() += a.H_td * PHt.row(idx::kTd);
-  }
-  S.diagonal().array() += r_var;
-  symmetrize(S);
-  const Eigen::LLT<Eigen::MatrixXd> llt(S);
-  if (llt.info() != Eigen::Success) {  // numerically broken P: refuse rather than corrupt it
-    for (const auto& a : acc) result.invalid_ids.push_back(a.id);
-    result.accepted = 0;
-    return result;
-  }
-  const Eigen::MatrixXd K = llt.solve(PHt.transpose()).transpose();  // P H^T S^-1
-  const Eigen::VectorXd dx = K * r;
-  result.nis_sum = r.dot(llt.solve(r));
+  state.x = x0;
+  for (int i = 0; i < state.numLandmarks(); ++i) state.landmark(i) = l0[static_cast<size_t>(i)];
 
   // 3) Joseph form (I-KH) P (I-KH)^T + K R K^T, expanded without forming I-KH:
   //    P - K B^T - B K^T + K S K^T with B = P H^T. It holds for any gain K, so errors in K
@@ -110,7 +158,7 @@ UpdateResult ekfUpdate(FilterState& state, const std::vector<FeatureObservation>
   WK.rightCols(m) = K;
   P.triangularView<Eigen::Lower>() += KW * WK.transpose();
   P.triangularView<Eigen::StrictlyUpper>() = P.transpose();
-  state.boxplus(dx);
+  state.boxplus(d);
   return result;
 }
 

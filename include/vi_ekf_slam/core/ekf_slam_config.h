@@ -65,8 +65,8 @@ struct EkfSlamConfig {
   /// and infinity: a hand-held rig sees desks and beds at 1 m, and a point outside the prior is
   /// gated out once its parallax shows (0.3 made every mechanization diverge in a bedroom).
   double inverse_depth_sigma = 0.5;
-  int max_landmarks = 300;          ///< map size bound
-  double landmark_timeout_s = 2.0;  ///< drop landmarks not observed for this long [s]; <0: never
+  int max_landmarks = 150;          ///< map size bound
+  double landmark_timeout_s = 0.5;  ///< drop landmarks not observed for this long [s]; <0: never
   double max_imu_gap_s = 0.1;       ///< IMU intervals longer than this are gaps [s]
   /// Over a gap the IMU is interpolated, and the motion it missed enters as uncertainty: an
   /// unknown acceleration and angular rate with these std-devs (a walking torso: ~3 m/s^2, 0.3 rad/s).

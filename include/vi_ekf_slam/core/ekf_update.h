@@ -13,6 +13,9 @@ namespace vi_ekf_slam {
 struct UpdateParams {
   double pixel_noise_px = 1.0;     ///< std-dev of a feature position [px]
   double gate_probability = 0.95;  ///< chi^2 gate on each landmark's 2-dof innovation (0..1)
+  /// Linearizations per update [count]: 1 is the EKF, more the iterated EKF (the gate uses the
+  /// first); the iterations stop early once the correction no longer changes.
+  int iterations = 1;
 };
 
 struct UpdateResult {

@@ -18,7 +18,7 @@ namespace vi_ekf_slam {
 struct TrackerParams {
   enum class Detector { kShiTomasi, kFast };
   Detector detector = Detector::kShiTomasi;
-  int max_tracks = 150;  ///< target number of tracks
+  int max_tracks = 100;  ///< target number of tracks
   int grid_cols = 8;     ///< new corners are spread over this grid
   int grid_rows = 6;
   double min_distance_px = 12.0;     ///< minimum distance between corners [px]
