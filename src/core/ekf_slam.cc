@@ -225,13 +225,16 @@ FrameResult EkfSlam::processFrame(const CameraFrame& camera_frame) {
     (state_.findLandmark(f.id) ? known : fresh).push_back(f);
   }
   // "Seen moving" is latched: it ends with a stand and starts again once the parallax over the
-  // detector's window reaches moving_parallax_px. Standing only counts when the filter agrees (the
-  // zero-velocity update passed its gate): walking towards a distant scene can look like standing
-  // to the parallax test alone. A hand-held rig that is not quite standing (parallax between
-  // max_parallax_px and moving_parallax_px) still has too little baseline for a new point.
-  if (!r.stationary.has_history || r.zero_velocity_applied) {
+  // detector's window reaches moving_parallax_px, or once the filter's own speed is surely a
+  // walk's (moving_speed_mps), which also holds before the detector has a window. Standing only
+  // counts when the filter agrees (the zero-velocity update passed its gate): walking towards a
+  // distant scene can look like standing to the parallax test alone. A hand-held rig that is not
+  // quite standing (parallax between max_parallax_px and moving_parallax_px) still has too little
+  // baseline for a new point.
+  const bool moving = confidentlyMoving();
+  if (r.zero_velocity_applied || (!r.stationary.has_history && !moving)) {
     seen_moving_ = false;
-  } else if (r.stationary.decided && r.stationary.parallax_px >= config_.zero_velocity.moving_parallax_px) {
+  } else if (moving || (r.stationary.decided && r.stationary.parallax_px >= config_.zero_velocity.moving_parallax_px)) {
     seen_moving_ = true;
   }
   if (config_.zero_velocity.enabled && config_.zero_velocity.defer_landmarks && !seen_moving_ && !at_rest) {
@@ -277,6 +280,15 @@ FrameResult EkfSlam::processFrame(const CameraFrame& camera_frame) {
                               static_cast<int>(r.update.rejected_ids.size()), config_.divergence);
   r.processed = true;
   return r;
+}
+
+bool EkfSlam::confidentlyMoving() const {
+  const Vec3 v = state_.x.v_s_b;
+  const double speed = v.norm();
+  if (!(speed > 0.0)) return false;
+  const Vec3 u = v / speed;
+  const double var = u.dot(state_.covariance().block<3, 3>(idx::kV, idx::kV) * u);
+  return speed - 2.0 * std::sqrt(std::max(0.0, var)) >= config_.zero_velocity.moving_speed_mps;
 }
 
 bool EkfSlam::setConfig(const EkfSlamConfig& config, std::string* error) {

@@ -87,6 +87,9 @@ std::string EkfSlamConfig::validate() const {
   requirePositive(err, "zero_velocity.still_accel_std_mps2 [m/s^2]", zero_velocity.still_accel_std_mps2);
   requirePositive(err, "zero_velocity.still_gyro_radps [rad/s]", zero_velocity.still_gyro_radps);
   requirePositive(err, "zero_velocity.max_parallax_px [px]", zero_velocity.max_parallax_px);
+  if (!(zero_velocity.moving_speed_mps > 0.0)) {
+    err << "zero_velocity.moving_speed_mps [m/s] must be > 0 (got " << zero_velocity.moving_speed_mps << ")\n";
+  }
   if (!(zero_velocity.moving_parallax_px >= zero_velocity.max_parallax_px)) {
     err << "zero_velocity.moving_parallax_px [px] must be >= max_parallax_px (got " << zero_velocity.moving_parallax_px
         << ")\n";

@@ -296,6 +296,7 @@ std::string loadParams(const ParamSource& source, NodeParams* out) {
   rd("lost_max_speed_mps", f.divergence.max_speed_mps);
   rd("lost_max_rejected_fraction", f.divergence.max_rejected_fraction);
   rd("lost_window_s", f.divergence.window_s);
+  rd("zero_velocity_moving_speed_mps", f.zero_velocity.moving_speed_mps);
   rd("camera_time_offset_s", f.camera_time_offset_s);
   rd("initial_sigma_time_offset_s", f.initial.time_offset_s);
   StaticInitParams& s = p.static_init;
@@ -363,7 +364,8 @@ std::string describeParams(const NodeParams& p) {
     << " features, sigma " << f.zero_velocity.velocity_sigma_mps << " [m/s] (at rest "
     << f.zero_velocity.rest_velocity_sigma_mps << " [m/s]), gate " << f.zero_velocity.gate_probability
     << ", new landmarks " << (f.zero_velocity.defer_landmarks ? "wait until the rig is seen moving" : "enter at once")
-    << " (moving: parallax >= " << f.zero_velocity.moving_parallax_px << " [px]; at rest: accel std < "
+    << " (moving: parallax >= " << f.zero_velocity.moving_parallax_px
+    << " [px] or speed >= " << f.zero_velocity.moving_speed_mps << " [m/s] by 2 sigma; at rest: accel std < "
     << f.zero_velocity.still_accel_std_mps2 << " [m/s^2], gyro < " << f.zero_velocity.still_gyro_radps << " [rad/s])\n"
     << "  imu noise: accel " << f.imu_noise.accel_noise_density << " [m/s^2/sqrt(Hz)], gyro "
     << f.imu_noise.gyro_noise_density << " [rad/s/sqrt(Hz)], accel walk " << f.imu_noise.accel_random_walk

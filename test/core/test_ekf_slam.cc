@@ -181,3 +181,31 @@ TEST(EkfSlam, AnImuGapAddsTheMotionItMissedAsUncertainty) {
   EXPECT_LT(std::abs(corr), 0.8);
   EXPECT_LT((with_gap.navState().p_n_b - without.navState().p_n_b).norm(), 1e-9);  // same mean
 }
+
+// New tracks wait while the rig is not known to move (zero_velocity.defer_landmarks), but the
+// filter's own speed tells a walk before the parallax detector has its first window: a rig that
+// starts at 1 m/s (sigma 0.05 m/s) maps its first tracks at once, one that starts at 0 waits.
+TEST(EkfSlam, NewTracksEnterAtOnceWhenTheFilterKnowsTheRigIsWalking) {
+  EkfSlamConfig cfg;
+  ASSERT_TRUE(cfg.zero_velocity.enabled && cfg.zero_velocity.defer_landmarks);
+  auto firstFrame = [&cfg](double speed_mps) {
+    EkfSlam f(cfg, sim::paperCamera(), sim::torsoCameraExtrinsics());
+    NavState init;
+    init.v_n_b = Vec3(speed_mps, 0.0, 0.0);
+    f.initialize(init);
+    for (int k = 0; k <= 12; ++k) {  // a hand's jitter: the IMU does not show rest
+      ImuData d;
+      d.timestamp = 0.005 * k;
+      d.am = Vec3((k % 2 ? 0.5 : -0.5), 0.0, -9.81);
+      EXPECT_TRUE(f.addImu(d));
+    }
+    CameraFrame frame;
+    frame.timestamp = 0.05;
+    for (int i = 0; i < 10; ++i) frame.features.push_back({i, Eigen::Vector2d(100.0 + 40.0 * i, 200.0 + 10.0 * i)});
+    const FrameResult r = f.processFrame(frame);
+    EXPECT_TRUE(r.processed);
+    return std::make_pair(static_cast<int>(r.new_ids.size()), r.deferred_features);
+  };
+  EXPECT_EQ(firstFrame(1.0), std::make_pair(10, 0));
+  EXPECT_EQ(firstFrame(0.0), std::make_pair(0, 10));
+}

@@ -85,6 +85,8 @@ class EkfSlam {
   void removeLandmarksById(const std::vector<std::int64_t>& ids);
   bool initializeLandmark(const FeatureObservation& obs);
   bool shouldCompose(int new_landmarks) const;
+  /// The estimated speed exceeds zero_velocity.moving_speed_mps by two standard deviations.
+  bool confidentlyMoving() const;
   void addGapUncertainty(double dt);
 
   EkfSlamConfig config_;

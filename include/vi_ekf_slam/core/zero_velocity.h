@@ -47,6 +47,11 @@ struct ZeroVelocityParams {
   /// this [px]. A rig swaying in a hand shows 2-5 px, above max_parallax_px but without the
   /// baseline a new point needs; walking shows tens of px.
   double moving_parallax_px = 8.0;
+  /// ... or the filter's own speed is at least this with 2-sigma confidence [m/s] (along the
+  /// estimated velocity). The parallax depends on the scene as much as on the motion (walking
+  /// slowly towards a far scene, or climbing stairs, shows few px for seconds) and held every new
+  /// point back from walks that never stood; a pedestrian's sway stays below 0.2 m/s.
+  double moving_speed_mps = 0.3;
   double still_accel_std_mps2 = 0.2;  ///< at rest: std-dev of each accelerometer axis below this [m/s^2]
   double still_gyro_radps = 0.05;     ///< at rest: every angular rate below this [rad/s]
   double still_window_s = 0.1;        ///< the rest test looks at the IMU samples of this long before a frame [s]
