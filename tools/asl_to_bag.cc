@@ -9,6 +9,7 @@
 #include <iostream>
 #include <opencv2/imgcodecs.hpp>
 
+#include "cli.h"
 #include "vi_ekf_slam/eval/datasets.h"
 #include "vi_ekf_slam/ros/bag_io.h"
 
@@ -17,19 +18,13 @@ using namespace vi_ekf_slam;
 int main(int argc, char** argv) {
   std::string asl, out;
   double margin = 1.0;
-  for (int i = 1; i + 1 < argc; i += 2) {
-    const std::string k = argv[i];
-    if (k == "--asl")
-      asl = argv[i + 1];
-    else if (k == "--out")
-      out = argv[i + 1];
-    else if (k == "--imu-margin")
-      margin = std::stod(argv[i + 1]);
-  }
-  if (asl.empty() || out.empty()) {
-    std::cerr << "usage: vi_ekf_slam_asl_to_bag --asl FOLDER/mav0 --out FILE [--imu-margin S]\n";
-    return 2;
-  }
+  const std::string usage = "vi_ekf_slam_asl_to_bag --asl FOLDER/mav0 --out FILE [--imu-margin S]";
+  cli::po::options_description opts("options");
+  opts.add_options()("asl", cli::po::value(&asl)->required(), "the ASL folder (mav0 with cam0, imu0)")(
+      "out", cli::po::value(&out)->required(), "the bag to write")(
+      "imu-margin", cli::po::value(&margin)->default_value(margin), "IMU kept around the images [s]");
+  cli::parse(argc, argv, usage, "Converts an ASL/EuRoC folder into a bag with the topics of a real rig.", opts);
+  if (!(margin >= 0.0)) cli::fail(usage, "--imu-margin must be >= 0");
   try {
     const eval::AslCamera cam = eval::readAslCamera(asl + "/cam0/sensor.yaml");
     const ImuNoiseParams noise = eval::readAslImuNoise(asl + "/imu0/sensor.yaml");

@@ -10,6 +10,7 @@
 #include <cstdio>
 #include <iostream>
 
+#include "cli.h"
 #include "vi_ekf_slam/core/frames.h"
 #include "vi_ekf_slam/ros/bag_io.h"
 #include "vi_ekf_slam/sim/renderer.h"
@@ -21,30 +22,19 @@ int main(int argc, char** argv) {
   std::string out, trajectory = "builtin";
   double duration = 35.0, standing = 2.0;
   int seed = 1, blur = 1;
-  for (int i = 1; i + 1 < argc; i += 2) {
-    const std::string k = argv[i], v = argv[i + 1];
-    if (k == "--out")
-      out = v;
-    else if (k == "--trajectory")
-      trajectory = v;
-    else if (k == "--duration")
-      duration = std::stod(v);
-    else if (k == "--standing")
-      standing = std::stod(v);
-    else if (k == "--seed")
-      seed = std::stoi(v);
-    else if (k == "--blur")
-      blur = std::stoi(v);
-    else {
-      std::cerr << "unknown option " << k << "\n";
-      return 2;
-    }
-  }
-  if (out.empty()) {
-    std::cerr << "usage: vi_ekf_slam_make_bag --out FILE [--trajectory builtin|TUM_FILE] [--duration S] "
-                 "[--standing S] [--seed N] [--blur SAMPLES]\n";
-    return 2;
-  }
+  const std::string usage =
+      "vi_ekf_slam_make_bag --out FILE [--trajectory builtin|TUM_FILE] [--duration S] [--standing S] [--seed N] "
+      "[--blur SAMPLES]";
+  cli::po::options_description opts("options");
+  opts.add_options()("out", cli::po::value(&out)->required(), "the bag to write")(
+      "trajectory", cli::po::value(&trajectory)->default_value(trajectory), "builtin, or a TUM file (z up)")(
+      "duration", cli::po::value(&duration)->default_value(duration), "walk after the stand [s]")(
+      "standing", cli::po::value(&standing)->default_value(standing), "built-in walk: stand still first [s]")(
+      "seed", cli::po::value(&seed)->default_value(seed), "random seed")(
+      "blur", cli::po::value(&blur)->default_value(blur), "motion blur: renders averaged per image [count]");
+  cli::parse(argc, argv, usage, "Renders a simulated walk into a rosbag with the topics of a real rig.", opts);
+  if (!(duration > 0.0) || !(standing >= 0.0)) cli::fail(usage, "--duration must be > 0 and --standing >= 0");
+  if (blur < 1) cli::fail(usage, "--blur must be >= 1");
   const auto tic = std::chrono::steady_clock::now();
   sim::Scenario sc;
   std::vector<sim::Quad> quads;

@@ -4,13 +4,25 @@
 #include <cstdlib>
 #include <string>
 
+#include "cli.h"
 #include "vi_ekf_slam/sim/scenarios.h"
 
 using namespace vi_ekf_slam;
 
 int main(int argc, char** argv) {
-  const double duration = argc > 1 ? std::atof(argv[1]) : 30.0;
-  const unsigned seed = argc > 2 ? static_cast<unsigned>(std::atoi(argv[2])) : 1u;
+  double duration = 30.0;
+  unsigned seed = 1u;
+  const std::string usage = "vi_ekf_slam_simulate_short [DURATION_S (30)] [SEED (1)]";
+  cli::po::options_description opts("options");
+  opts.add_options()("duration", cli::po::value(&duration)->default_value(duration), "walk duration [s]")(
+      "seed", cli::po::value(&seed)->default_value(seed), "random seed");
+  cli::po::positional_options_description pos;
+  pos.add("duration", 1).add("seed", 1);
+  cli::parse(argc, argv, usage,
+             "A short simulated walk on a circle through the core for each mechanization: the estimated and the true "
+             "final pose.",
+             opts, pos);
+  if (!(duration >= 1.0)) cli::fail(usage, "the duration must be >= 1 s");
   const sim::Scenario sc = sim::circleScenario(duration, /*noise=*/true, seed);
   std::printf("Simulated walk on a %.0f s circle (r = 6 m), IMU 200 Hz, camera 28 Hz, 1 px noise, seed %u\n\n",
               duration, seed);

@@ -20,6 +20,7 @@
 #include <utility>
 #include <vector>
 
+#include "cli.h"
 #include "vi_ekf_slam/core/allocator_tuning.h"
 #include "vi_ekf_slam/sim/loop_walk.h"
 #include "vi_ekf_slam/sim/monte_carlo.h"
@@ -70,26 +71,24 @@ struct FaultRecord {
 int main(int argc, char** argv) {
   tuneAllocatorForLargeBuffers();
   double minutes = 30.0;
-  std::string out = "results/soak", which = "all";
+  std::string out = "results/soak", which = "all", faults_arg = "on";
   std::uint64_t seed = 1;
-  bool faults = true;
-  for (int i = 1; i + 1 < argc; i += 2) {
-    const std::string k = argv[i], v = argv[i + 1];
-    if (k == "--minutes")
-      minutes = std::stod(v);
-    else if (k == "--out")
-      out = v;
-    else if (k == "--mechanizations")
-      which = v;
-    else if (k == "--seed")
-      seed = std::stoull(v);
-    else if (k == "--faults" && (v == "on" || v == "off"))
-      faults = v == "on";
-    else {
-      std::cerr << "unknown option " << k << "\n";
-      return 2;
-    }
-  }
+  const std::string usage =
+      "vi_ekf_slam_soak [--minutes 30] [--out results/soak] [--mechanizations all|NAME,...] [--seed 1] "
+      "[--faults on|off]";
+  cli::po::options_description opts("options");
+  opts.add_options()("minutes", cli::po::value(&minutes)->default_value(minutes), "walk duration [min]")(
+      "out", cli::po::value(&out)->default_value(out), "output folder")(
+      "mechanizations", cli::po::value(&which)->default_value(which), "all, or names of mechanizations")(
+      "seed", cli::po::value(&seed)->default_value(seed), "random seed")(
+      "faults", cli::po::value(&faults_arg)->default_value(faults_arg), "inject sensor faults: on|off");
+  cli::parse(argc, argv, usage,
+             "Endurance: a long walk (laps of a block) per mechanization through the core; error, map size and "
+             "resident memory over time.",
+             opts);
+  if (!(minutes > 0.0)) cli::fail(usage, "--minutes must be > 0");
+  if (faults_arg != "on" && faults_arg != "off") cli::fail(usage, "--faults must be on or off");
+  const bool faults = faults_arg == "on";
   std::vector<Mechanization> mechs;
   for (auto m :
        {Mechanization::kWorldCentric, Mechanization::kSensorCentric, Mechanization::kSensorCentricComposition}) {

@@ -27,6 +27,7 @@
 #include <sstream>
 #include <thread>
 
+#include "cli.h"
 #include "vi_ekf_slam/sim/monte_carlo.h"
 #include "vi_ekf_slam/core/allocator_tuning.h"
 #include "vi_ekf_slam/eval/datasets.h"
@@ -69,70 +70,44 @@ struct Options {
   bool new_landmarks_given = false;  // "default" keeps the core's choice unless told
 };
 
-[[noreturn]] void usage(const std::string& err) {
-  std::cerr << "error: " << err << "\n"
-            << "usage: vi_ekf_slam_study --trajectory builtin|FILE [--runs N] [--seed S] [--out DIR]\n"
-               "       [--configs paper|all|NAME,...] [--threads N] [--density PER_M2] [--per-metre N]\n"
-               "       [--start-offset S] [--max-duration S] [--max-landmarks N] [--start truth|prior]\n"
-               "       [--imu ASL_IMU_CSV] [--imu-noise datasheet|euroc_mav] [--preset openvins_sim]\n"
-               "       [--gate P] (chi^2 gate probability of every configuration)\n"
-               "       [--new-landmarks wait|immediate] (+zero_velocity: while the rig is not seen moving)\n"
-               "       [--update-iterations N] (1: EKF, more: iterated EKF update, every configuration)\n";
-  std::exit(2);
-}
+const char* const kUsage =
+    "vi_ekf_slam_study --trajectory builtin|FILE [--runs N] [--seed S] [--out DIR] [--configs paper|all|NAME,...] "
+    "[more options: --help]";
+
+[[noreturn]] void usage(const std::string& err) { cli::fail(kUsage, err); }
 
 Options parse(int argc, char** argv) {
   Options o;
-  for (int i = 1; i < argc; ++i) {
-    const std::string k = argv[i];
-    if (i + 1 >= argc) usage("missing value for " + k);
-    const std::string v = argv[++i];
-    try {
-      if (k == "--trajectory")
-        o.trajectory = v;
-      else if (k == "--runs")
-        o.runs = std::stoi(v);
-      else if (k == "--seed")
-        o.seed = std::stoull(v);
-      else if (k == "--out")
-        o.out = v;
-      else if (k == "--configs")
-        o.configs = v;
-      else if (k == "--threads")
-        o.threads = std::stoi(v);
-      else if (k == "--density")
-        o.density = std::stod(v);
-      else if (k == "--per-metre")
-        o.per_metre = std::stod(v);
-      else if (k == "--max-duration")
-        o.max_duration = std::stod(v);
-      else if (k == "--start-offset")
-        o.start_offset = std::stod(v);
-      else if (k == "--max-landmarks")
-        o.max_landmarks = std::stoi(v);
-      else if (k == "--imu")
-        o.imu = v;
-      else if (k == "--imu-noise")
-        o.imu_noise = v;
-      else if (k == "--preset")
-        o.preset = v;
-      else if (k == "--start")
-        o.start = v;
-      else if (k == "--gate")
-        o.gate = std::stod(v);
-      else if (k == "--new-landmarks") {
-        o.new_landmarks = v;
-        o.new_landmarks_given = true;
-      } else if (k == "--update-iterations")
-        o.update_iterations = std::stoi(v);
-      else if (k == "--inverse-depth")
-        o.inverse_depth = v;
-      else
-        usage("unknown option " + k);
-    } catch (const std::logic_error&) {
-      usage("bad value '" + v + "' for " + k);
-    }
-  }
+  namespace po = cli::po;
+  po::options_description d("options");
+  d.add_options()("trajectory", po::value(&o.trajectory)->default_value(o.trajectory), "builtin, or a TUM file (z up)")(
+      "runs", po::value(&o.runs)->default_value(o.runs), "Monte-Carlo runs per configuration")(
+      "seed", po::value(&o.seed)->default_value(o.seed), "run r uses seed * 1000003 + r")(
+      "out", po::value(&o.out)->default_value(o.out), "output folder")(
+      "configs", po::value(&o.configs)->default_value(o.configs),
+      "paper | all | names, comma-separated (\"default\": the node's default configuration)")(
+      "threads", po::value(&o.threads)->default_value(o.threads), "worker threads")(
+      "density", po::value(&o.density)->default_value(o.density), "built-in walk: landmarks per m^2 of wall")(
+      "per-metre", po::value(&o.per_metre)->default_value(o.per_metre), "TUM files: landmarks per metre of path")(
+      "start-offset", po::value(&o.start_offset)->default_value(o.start_offset), "start this long into the file [s]")(
+      "max-duration", po::value(&o.max_duration)->default_value(o.max_duration), "window length, 0: to the end [s]")(
+      "max-landmarks", po::value(&o.max_landmarks)->default_value(o.max_landmarks),
+      "map bound of every configuration (0: 300, or 100 with the preset)")(
+      "imu", po::value(&o.imu), "a recorded ASL IMU (imu0/data.csv) of the same recording as --trajectory")(
+      "imu-noise", po::value(&o.imu_noise)->default_value(o.imu_noise), "datasheet | euroc_mav (with --imu)")(
+      "preset", po::value(&o.preset), "openvins_sim: OpenVINS's simulator setup on a TUM file")(
+      "start", po::value(&o.start), "truth | prior (default: prior, truth with the preset)")(
+      "gate", po::value(&o.gate)->default_value(o.gate), "chi^2 gate probability of every configuration (0: default)")(
+      "new-landmarks", po::value(&o.new_landmarks)->default_value(o.new_landmarks),
+      "wait | immediate: +zero_velocity configurations hold new tracks until the rig is seen moving, or not")(
+      "update-iterations", po::value(&o.update_iterations)->default_value(o.update_iterations),
+      "1: EKF update, more: iterated update, every configuration (0: default)")(
+      "inverse-depth", po::value(&o.inverse_depth), "INITIAL_DEPTH_M,SIGMA_PER_M of new inverse-depth landmarks");
+  const po::variables_map vm = cli::parse(argc, argv, kUsage,
+                                          "Monte-Carlo consistency study (paper Sec. IV-A): M runs of each filter "
+                                          "configuration on the built-in hallway walk or a TUM trajectory.",
+                                          d);
+  o.new_landmarks_given = !vm["new-landmarks"].defaulted();
   if (o.update_iterations < 0 || o.update_iterations > 20) usage("--update-iterations must be in [1, 20]");
   if (o.runs < 2) usage("--runs must be >= 2 (NEES bands need several runs)");
   if (o.threads < 1) usage("--threads must be >= 1");

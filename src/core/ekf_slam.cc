@@ -225,8 +225,8 @@ FrameResult EkfSlam::processFrame(const CameraFrame& camera_frame) {
     (state_.findLandmark(f.id) ? known : fresh).push_back(f);
   }
   // "Seen moving" is latched: it ends with a stand and starts again once the parallax over the
-  // detector's window reaches moving_parallax_px, or once the filter's own speed is surely a
-  // walk's (moving_speed_mps), which also holds before the detector has a window. Standing only
+  // detector's window reaches moving_parallax_px. Before the detector has a window (start, reset)
+  // the filter's own speed decides: surely a walk's (moving_speed_mps) or not. Standing only
   // counts when the filter agrees (the zero-velocity update passed its gate): walking towards a
   // distant scene can look like standing to the parallax test alone. A hand-held rig that is not
   // quite standing (parallax between max_parallax_px and moving_parallax_px) still has too little
@@ -234,7 +234,8 @@ FrameResult EkfSlam::processFrame(const CameraFrame& camera_frame) {
   const bool moving = confidentlyMoving();
   if (r.zero_velocity_applied || (!r.stationary.has_history && !moving)) {
     seen_moving_ = false;
-  } else if (moving || (r.stationary.decided && r.stationary.parallax_px >= config_.zero_velocity.moving_parallax_px)) {
+  } else if ((moving && !r.stationary.has_history) ||
+             (r.stationary.decided && r.stationary.parallax_px >= config_.zero_velocity.moving_parallax_px)) {
     seen_moving_ = true;
   }
   if (config_.zero_velocity.enabled && config_.zero_velocity.defer_landmarks && !seen_moving_ && !at_rest) {

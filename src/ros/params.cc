@@ -365,8 +365,9 @@ std::string describeParams(const NodeParams& p) {
     << f.zero_velocity.rest_velocity_sigma_mps << " [m/s]), gate " << f.zero_velocity.gate_probability
     << ", new landmarks " << (f.zero_velocity.defer_landmarks ? "wait until the rig is seen moving" : "enter at once")
     << " (moving: parallax >= " << f.zero_velocity.moving_parallax_px
-    << " [px] or speed >= " << f.zero_velocity.moving_speed_mps << " [m/s] by 2 sigma; at rest: accel std < "
-    << f.zero_velocity.still_accel_std_mps2 << " [m/s^2], gyro < " << f.zero_velocity.still_gyro_radps << " [rad/s])\n"
+    << " [px], before the first window speed >= " << f.zero_velocity.moving_speed_mps
+    << " [m/s] by 2 sigma; at rest: accel std < " << f.zero_velocity.still_accel_std_mps2 << " [m/s^2], gyro < "
+    << f.zero_velocity.still_gyro_radps << " [rad/s])\n"
     << "  imu noise: accel " << f.imu_noise.accel_noise_density << " [m/s^2/sqrt(Hz)], gyro "
     << f.imu_noise.gyro_noise_density << " [rad/s/sqrt(Hz)], accel walk " << f.imu_noise.accel_random_walk
     << " [m/s^3/sqrt(Hz)], gyro walk " << f.imu_noise.gyro_random_walk << " [rad/s^2/sqrt(Hz)]\n"
