@@ -16,6 +16,7 @@
 #include <sensor_msgs/CompressedImage.h>
 #include <sensor_msgs/Image.h>
 #include <sensor_msgs/Imu.h>
+#include <std_msgs/Time.h>
 #include <sensor_msgs/image_encodings.h>
 #include <tf2_eigen/tf2_eigen.h>
 #include <tf2_ros/static_transform_broadcaster.h>
@@ -101,6 +102,9 @@ int main(int argc, char** argv) {
   ros::Publisher compressed_pub = nh.advertise<sensor_msgs::CompressedImage>("/camera/image_raw/compressed", 10);
   ros::Publisher info_pub = nh.advertise<sensor_msgs::CameraInfo>("/camera/camera_info", 10);
   ros::Publisher gt_pub = nh.advertise<geometry_msgs::PoseStamped>("/ground_truth/pose", 50);
+  // Latched once the stream is over: the stamp of its last IMU sample. Checkers listen until then
+  // (and until the node has caught up), not for a wall-clock window a loaded machine may cut short.
+  ros::Publisher end_pub = nh.advertise<std_msgs::Time>("/stream/end", 1, true);
   tf2_ros::StaticTransformBroadcaster tf_static;
   geometry_msgs::TransformStamped T;
   T.header.stamp = ros::Time::now();
@@ -192,6 +196,9 @@ int main(int argc, char** argv) {
       gt_pub.publish(gt);
     }
   }
+  std_msgs::Time end;
+  end.data = last_imu.header.stamp;
+  end_pub.publish(end);
   ROS_INFO("synthetic_stream: done");
   ros::spin();  // stay up until the test ends
   return 0;

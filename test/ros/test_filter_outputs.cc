@@ -1,5 +1,6 @@
 // rostest checker for the vi_ekf_slam node/nodelet. Parameters (private):
-//   listen_s            how long to listen [s]
+//   listen_s            the stream's nominal length [s]: the checker listens until the stream's end
+//                       (/stream/end) and the node caught up, at most listen_s + 60 s
 //   expect_odom         odometry must be published (default true)
 //   min_odom_hz         minimum odometry rate while running [Hz]
 //   max_final_error_m   final position error against /ground_truth/pose after aligning the
@@ -22,6 +23,7 @@
 #include <ros/ros.h>
 #include <sensor_msgs/PointCloud2.h>
 #include <std_msgs/String.h>
+#include <std_msgs/Time.h>
 #include <std_srvs/Trigger.h>
 
 #include <Eigen/Geometry>
@@ -116,21 +118,39 @@ TEST(FilterNode, BehavesOnThisInputStream) {
         }
       });
 
+  double stream_end = 0.0;  // stamp of the stream's last IMU sample, once it is over
+  auto s7 = nh.subscribe<std_msgs::Time>("/stream/end", 1, [&](const std_msgs::TimeConstPtr& m) {
+    std::lock_guard<std::mutex> l(rec.m);
+    stream_end = m->data.toSec();
+  });
+
   ros::AsyncSpinner spinner(2);
   spinner.start();
+  // Listen until the stream is over and the node has caught up with it (its odometry reaches the
+  // stream's last image), not for a fixed wall-clock window: a loaded machine renders and streams
+  // slower. listen_s (the stream's nominal length) + kMaxDelayS only bounds a node that never
+  // catches up; after the end, a node that does not catch up gets kCatchUpS, and a test without
+  // odometry drains kDrainS.
+  constexpr double kMaxDelayS = 60.0, kCatchUpS = 10.0, kDrainS = 2.0, kCaughtUpS = 0.2;
   const ros::WallTime start = ros::WallTime::now();
-  ros::WallTime first_odom;
+  ros::WallTime first_odom, end_seen;
   bool reset_done = false, switch_done = false;
   double switch_stamp = 0.0;
-  while (ros::ok() && (ros::WallTime::now() - start).toSec() < listen_s) {
+  while (ros::ok() && (ros::WallTime::now() - start).toSec() < listen_s + kMaxDelayS) {
     ros::WallDuration(0.05).sleep();
-    double last_stamp = 0.0;
+    double last_stamp = 0.0, end = 0.0;
     {
       // Never call services while holding the lock: the spinner threads need it.
       std::lock_guard<std::mutex> l(rec.m);
-      if (rec.odom.empty()) continue;
-      last_stamp = rec.odom.back().header.stamp.toSec();
+      end = stream_end;
+      if (!rec.odom.empty()) last_stamp = rec.odom.back().header.stamp.toSec();
     }
+    if (end > 0.0) {
+      if (end_seen.isZero()) end_seen = ros::WallTime::now();
+      const bool caught_up = expect_odom && last_stamp >= end - 1.0 / 28.0 - kCaughtUpS;
+      if (caught_up || (ros::WallTime::now() - end_seen).toSec() > (expect_odom ? kCatchUpS : kDrainS)) break;
+    }
+    if (last_stamp == 0.0) continue;
     if (first_odom.isZero()) first_odom = ros::WallTime::now();
     const double since = (ros::WallTime::now() - first_odom).toSec();
     if (reset_at >= 0 && !reset_done && since > reset_at) {
