@@ -1,6 +1,9 @@
-// image_transport "compressed" subscriber (sensor_msgs/CompressedImage, JPEG or PNG): Debian
-// ships image_transport without its plugins package, so users could not set
-// `image_transport: compressed` otherwise. Decoding uses OpenCV.
+// image_transport subscriber of sensor_msgs/CompressedImage (JPEG or PNG) on "<base>/compressed":
+// Debian ships image_transport without its plugins package, so users could not set
+// `image_transport: compressed` otherwise. Decoding uses OpenCV. It registers under its own name
+// (transport "vi_ekf_slam_compressed", lookup "image_transport/vi_ekf_slam_compressed_sub") so it
+// never collides with compressed_image_transport's "image_transport/compressed_sub" where that is
+// installed; the node maps `image_transport: compressed` to it.
 #include <cv_bridge/cv_bridge.h>
 #include <image_transport/simple_subscriber_plugin.h>
 #include <opencv2/imgcodecs.hpp>
@@ -12,9 +15,12 @@ namespace vi_ekf_slam {
 
 class CompressedSubscriber : public image_transport::SimpleSubscriberPlugin<sensor_msgs::CompressedImage> {
  public:
-  std::string getTransportName() const override { return "compressed"; }
+  std::string getTransportName() const override { return "vi_ekf_slam_compressed"; }
 
  protected:
+  /// The standard topic of compressed images, whatever the transport's own name.
+  std::string getTopicToSubscribe(const std::string& base_topic) const override { return base_topic + "/compressed"; }
+
   void internalCallback(const sensor_msgs::CompressedImageConstPtr& msg, const Callback& user_cb) override {
     cv::Mat img;
     try {

@@ -78,9 +78,18 @@ EkfSlamRos::EkfSlamRos(ros::NodeHandle nh, ros::NodeHandle pnh) : nh_(nh), pnh_(
         ++rate_image_count_;
         processor_->image(*m);
       },
-      ros::VoidPtr(), image_transport::TransportHints("raw", ros::TransportHints(), pnh_));
+      ros::VoidPtr(), imageTransportHints());
   diag_timer_ = nh_.createTimer(ros::Duration(0.25), &EkfSlamRos::diagnosticsTimer, this);
   ROS_INFO("vi_ekf_slam: waiting for imu, image (%s transport) and camera_info", image_sub_.getTransport().c_str());
+}
+
+image_transport::TransportHints EkfSlamRos::imageTransportHints() const {
+  std::string transport = "raw";
+  pnh_.param("image_transport", transport, transport);
+  if (transport == "compressed") transport = "vi_ekf_slam_compressed";
+  // The transport is chosen here; TransportHints would read ~image_transport again, so it is
+  // pointed at a parameter name nobody sets and falls back to the choice above.
+  return image_transport::TransportHints(transport, ros::TransportHints(), pnh_, "image_transport_resolved_by_node");
 }
 
 void EkfSlamRos::odometry(const nav_msgs::Odometry& odom) {

@@ -37,6 +37,9 @@ class EkfSlamRos : public OutputSink {
 
  private:
   void diagnosticsTimer(const ros::TimerEvent&);
+  /// ~image_transport (raw | compressed | any installed transport), with "compressed" served by
+  /// this package's own plugin (src/ros/compressed_subscriber.cc).
+  image_transport::TransportHints imageTransportHints() const;
   void diagnoseInputs(diagnostic_updater::DiagnosticStatusWrapper& stat);
   void diagnoseFilter(diagnostic_updater::DiagnosticStatusWrapper& stat);
 
