@@ -137,6 +137,23 @@ std::string formatGate(double p) {
   return s.str();
 }
 
+/// What every configuration, the default included, is told: the simulated sensors' noise (what a
+/// rig's calibration gives) and the options given for all configurations.
+EkfSlamConfig withStudyOptions(EkfSlamConfig c, const Options& o, const sim::Scenario& sc) {
+  c.imu_noise = sc.imu.noise;
+  c.update.pixel_noise_px = sc.cam.pixel_noise_px;
+  if (o.preset == "openvins_sim") c.initial = sim::openvinsSimInitialUncertainty();
+  if (!o.inverse_depth.empty()) {
+    c.inverse_depth_initial_m = o.inverse_depth_initial_m;
+    c.inverse_depth_sigma = o.inverse_depth_sigma;
+  }
+  if (o.update_iterations > 0) c.update.iterations = o.update_iterations;
+  // The recorded IMU is EuRoC's MAV: standing on the ground it does not sway like a pedestrian.
+  if (!o.imu.empty()) c.zero_velocity.velocity_sigma_mps = eval::kEurocMavStandingVelocitySigma;
+  if (o.gate > 0.0) c.update.gate_probability = o.gate;
+  return c;
+}
+
 /// The configurations of the study. The paper's three (fixed 8 m depth, composition when more
 /// than four landmarks were added at once), then beyond the paper: the same with anchored
 /// inverse-depth landmarks, and the composition after every update (robocentric) with each
@@ -146,30 +163,17 @@ std::vector<std::pair<std::string, EkfSlamConfig>> makeConfigs(const Options& o,
   std::vector<std::pair<std::string, EkfSlamConfig>> all;
   auto add = [&](Mechanization m, LandmarkInitMethod init, CompositionTrigger trig, bool zero_velocity = false,
                  double gate = 0.0) {
-    EkfSlamConfig c;
+    EkfSlamConfig c = withStudyOptions(EkfSlamConfig(), o, sc);
     c.mechanization = m;
     c.landmark_init = init;
     c.composition_trigger = trig;
-    c.imu_noise = sc.imu.noise;
-    c.update.pixel_noise_px = sc.cam.pixel_noise_px;
     c.landmark_timeout_s = 1.0;  // marginalize landmarks out of view for 1 s
     // The preset bounds the map like OpenVINS bounds its SLAM + MSCKF features per update; the
     // accuracy is the same as with 300 (README) at 60-80% of the time per frame.
     c.max_landmarks = o.max_landmarks > 0 ? o.max_landmarks : (o.preset.empty() ? 300 : 100);
-    if (o.preset == "openvins_sim") c.initial = sim::openvinsSimInitialUncertainty();
     c.zero_velocity.enabled = zero_velocity;
-    if (!o.inverse_depth.empty()) {
-      c.inverse_depth_initial_m = o.inverse_depth_initial_m;
-      c.inverse_depth_sigma = o.inverse_depth_sigma;
-    }
     c.zero_velocity.defer_landmarks = o.new_landmarks == "wait";
-    if (o.update_iterations > 0) c.update.iterations = o.update_iterations;
-    // The recorded IMU is EuRoC's MAV: standing on the ground it does not sway like a pedestrian.
-    if (!o.imu.empty()) c.zero_velocity.velocity_sigma_mps = eval::kEurocMavStandingVelocitySigma;
-    if (gate > 0.0)
-      c.update.gate_probability = gate;
-    else if (o.gate > 0.0)
-      c.update.gate_probability = o.gate;
+    if (gate > 0.0) c.update.gate_probability = gate;
     std::string name = toString(m);
     if (init == LandmarkInitMethod::kInverseDepth) name += "+inverse_depth";
     if (m == Mechanization::kSensorCentricComposition && trig == CompositionTrigger::kEveryUpdate) {
@@ -201,19 +205,9 @@ std::vector<std::pair<std::string, EkfSlamConfig>> makeConfigs(const Options& o,
   // config/vi_ekf_slam.yaml), told only what a rig's calibration would tell it: the sensors'
   // noise, and the options given to every configuration.
   {
-    EkfSlamConfig c;
-    c.imu_noise = sc.imu.noise;
-    c.update.pixel_noise_px = sc.cam.pixel_noise_px;
-    if (o.preset == "openvins_sim") c.initial = sim::openvinsSimInitialUncertainty();
+    EkfSlamConfig c = withStudyOptions(EkfSlamConfig(), o, sc);
     if (o.max_landmarks > 0) c.max_landmarks = o.max_landmarks;
-    if (!o.inverse_depth.empty()) {
-      c.inverse_depth_initial_m = o.inverse_depth_initial_m;
-      c.inverse_depth_sigma = o.inverse_depth_sigma;
-    }
     if (o.new_landmarks_given) c.zero_velocity.defer_landmarks = o.new_landmarks == "wait";
-    if (!o.imu.empty()) c.zero_velocity.velocity_sigma_mps = eval::kEurocMavStandingVelocitySigma;
-    if (o.gate > 0.0) c.update.gate_probability = o.gate;
-    if (o.update_iterations > 0) c.update.iterations = o.update_iterations;
     all.emplace_back("default", c);
   }
   if (o.configs == "all") return all;

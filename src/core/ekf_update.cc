@@ -81,6 +81,10 @@ UpdateResult ekfUpdate(FilterState& state, const std::vector<FeatureObservation>
   const int m = 2 * result.accepted;
   const MotionState x0 = state.x;
   const std::vector<Landmark> l0 = state.landmarks();
+  auto restorePrior = [&] {  // the mean back to x_0 (the iterates only move the mean)
+    state.x = x0;
+    for (int i = 0; i < state.numLandmarks(); ++i) state.landmark(i) = l0[static_cast<size_t>(i)];
+  };
   Eigen::MatrixXd PHt(n, m), S(m, m), K;
   Eigen::VectorXd r(m), d = Eigen::VectorXd::Zero(n);
   Eigen::LLT<Eigen::MatrixXd> llt;
@@ -89,8 +93,7 @@ UpdateResult ekfUpdate(FilterState& state, const std::vector<FeatureObservation>
     if (it > 0) {
       // Relinearize at x_i; an observation that can no longer be predicted ends the iterations
       // at the previous iterate (whose K is kept).
-      state.x = x0;
-      for (int i = 0; i < state.numLandmarks(); ++i) state.landmark(i) = l0[static_cast<size_t>(i)];
+      restorePrior();
       state.boxplus(d);
       bool ok = true;
       std::vector<AcceptedObservation> next = acc;
@@ -129,8 +132,7 @@ UpdateResult ekfUpdate(FilterState& state, const std::vector<FeatureObservation>
     symmetrize(S);
     llt.compute(S);
     if (llt.info() != Eigen::Success) {  // numerically broken P: refuse rather than corrupt it
-      state.x = x0;
-      for (int i = 0; i < state.numLandmarks(); ++i) state.landmark(i) = l0[static_cast<size_t>(i)];
+      restorePrior();
       for (const auto& a : acc) result.invalid_ids.push_back(a.id);
       result.accepted = 0;
       return result;
@@ -142,8 +144,7 @@ UpdateResult ekfUpdate(FilterState& state, const std::vector<FeatureObservation>
     if (it == 0) result.nis_sum = r.dot(llt.solve(r));  // of the prior's prediction, as gated
     if (change < kIterationTolerance) break;
   }
-  state.x = x0;
-  for (int i = 0; i < state.numLandmarks(); ++i) state.landmark(i) = l0[static_cast<size_t>(i)];
+  restorePrior();
 
   // 3) Joseph form (I-KH) P (I-KH)^T + K R K^T, expanded without forming I-KH:
   //    P - K B^T - B K^T + K S K^T with B = P H^T. It holds for any gain K, so errors in K
