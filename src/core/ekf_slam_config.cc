@@ -53,6 +53,9 @@ std::string EkfSlamConfig::validate() const {
     err << "gravity_mps2 must be in [9.7, 9.9] (got " << gravity_mps2 << ")\n";
   }
   requirePositive(err, "update.pixel_noise_px [px]", update.pixel_noise_px);
+  if (!(update.readout_time_s >= 0.0 && update.readout_time_s <= 0.1)) {
+    err << "update.readout_time_s [s] must be in [0, 0.1] (got " << update.readout_time_s << ")\n";
+  }
   if (update.iterations < 1 || update.iterations > 20) {
     err << "update.iterations must be in [1, 20] (got " << update.iterations << ")\n";
   }

@@ -30,6 +30,10 @@ UpdateResult ekfUpdate(FilterState& state, const std::vector<FeatureObservation>
   const double r_var = params.pixel_noise_px * params.pixel_noise_px;
   const double gate = chiSquaredQuantile(params.gate_probability, 2.0);
   const Eigen::MatrixXd& P0 = state.covariance();
+  // Rolling shutter: when the row at v was read, relative to the state's time (the middle row).
+  // First order, as the time offset: the prediction moves by the image velocity over it.
+  const double row_time_per_px = camera.height() > 0 ? params.readout_time_s / camera.height() : 0.0;
+  auto rowTime = [&](double v) { return row_time_per_px * (v - 0.5 * camera.height()); };
 
   // 1) Predict, linearize and gate every observation on its own 2-dof innovation.
   std::vector<AcceptedObservation> acc;
@@ -44,7 +48,6 @@ UpdateResult ekfUpdate(FilterState& state, const std::vector<FeatureObservation>
     }
     a.id = obs.id;
     a.col = state.landmarkIndex(*li);
-    a.residual = obs.uv - uv;
     a.measured = obs.uv;
     const int blocks[3] = {idx::kP, idx::kPsi, a.col};
     const Eigen::Matrix<double, 9, 9> Psub = gatherBlocks<3>(P0, blocks);
@@ -53,6 +56,7 @@ UpdateResult ekfUpdate(FilterState& state, const std::vector<FeatureObservation>
     // The pixel z seen at image time t_i belongs to the state at t_i + t_d; the filter is at
     // t_i + t_d_est, so z = h(x) + velocity * (t_d - t_d_est).
     if (!predictImageVelocity(state.x, state.landmark(*li), camera, T_b_c, omega_b, &a.H_td)) a.H_td.setZero();
+    a.residual = obs.uv - uv - a.H_td * rowTime(obs.uv.y());
     Eigen::Matrix<double, 1, 9> P_td;  // cross-covariance of t_d with the blocks above
     P_td << P0.block<1, 3>(idx::kTd, idx::kP), P0.block<1, 3>(idx::kTd, idx::kPsi), P0.block<1, 3>(idx::kTd, a.col);
     const Eigen::Vector2d HP_td = Hsub * P_td.transpose();
@@ -104,8 +108,8 @@ UpdateResult ekfUpdate(FilterState& state, const std::vector<FeatureObservation>
           ok = false;
           break;
         }
-        a.residual = a.measured - uv;
         if (!predictImageVelocity(state.x, state.landmark(*li), camera, T_b_c, omega_b, &a.H_td)) a.H_td.setZero();
+        a.residual = a.measured - uv - a.H_td * rowTime(a.measured.y());
       }
       if (!ok) break;
       acc = std::move(next);

@@ -1,6 +1,7 @@
 #include "vi_ekf_slam/core/feature_tracker.h"
 
 #include <algorithm>
+#include <cmath>
 #include <opencv2/calib3d.hpp>
 #include <opencv2/features2d.hpp>
 #include <opencv2/imgproc.hpp>
@@ -22,6 +23,7 @@ std::string TrackerParams::validate() const {
   if (!(ransac_threshold_px > 0.0)) err << "ransac_threshold_px must be > 0\n";
   if (border_px < 0) err << "border_px must be >= 0\n";
   if (!(redetect_fraction > 0.0 && redetect_fraction <= 1.0)) err << "redetect_fraction must be in (0, 1]\n";
+  if (max_image_width_px != 0 && max_image_width_px < 160) err << "max_image_width_px must be 0 or >= 160 px\n";
   return err.str();
 }
 
@@ -29,6 +31,26 @@ std::optional<TrackerParams::Detector> detectorFromString(const std::string& s) 
   if (s == "shi_tomasi") return TrackerParams::Detector::kShiTomasi;
   if (s == "fast") return TrackerParams::Detector::kFast;
   return std::nullopt;
+}
+
+CameraIntrinsics trackingIntrinsics(const CameraIntrinsics& full, int max_width_px) {
+  if (max_width_px <= 0 || full.width <= max_width_px) return full;
+  CameraIntrinsics t = full;
+  t.width = max_width_px;
+  t.height = std::max(1, static_cast<int>(std::lround(full.height * static_cast<double>(max_width_px) / full.width)));
+  const double sx = static_cast<double>(t.width) / full.width, sy = static_cast<double>(t.height) / full.height;
+  t.fx = full.fx * sx;
+  t.fy = full.fy * sy;
+  t.cx = (full.cx + 0.5) * sx - 0.5;
+  t.cy = (full.cy + 0.5) * sy - 0.5;
+  return t;
+}
+
+cv::Mat toTrackingResolution(const cv::Mat& img, const CameraIntrinsics& tracking) {
+  if (img.cols == tracking.width && img.rows == tracking.height) return img;
+  cv::Mat out;
+  cv::resize(img, out, cv::Size(tracking.width, tracking.height), 0.0, 0.0, cv::INTER_AREA);
+  return out;
 }
 
 FeatureTracker::FeatureTracker(const CameraModel& camera, const TrackerParams& params)

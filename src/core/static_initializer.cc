@@ -49,6 +49,7 @@ std::optional<StaticInitResult> StaticInitializer::addImu(const ImuData& imu) {
   r.timestamp = window_.back().timestamp;
   r.q_n_b = gravityAlignedAttitude(mean_a);
   r.b_g = mean_w;
+  r.b_a = (mean_a.norm() - params_.gravity_mps2) * mean_a.normalized();
   return r;
 }
 

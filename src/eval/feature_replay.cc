@@ -45,6 +45,7 @@ FeatureReplayResult replayFeatures(const FeatureTrackData& data, const std::vect
       s.timestamp = r->timestamp;
       s.q_n_b = r->q_n_b;
       s.b_g = r->b_g;
+      s.b_a = r->b_a;
       filter.initialize(s);
       out.init_time = r->timestamp;
     }

@@ -129,8 +129,10 @@ bool EkfSlamProcessor::cameraReady(const std::string& image_frame) {
   }
   if (!filter_) {
     try {
-      filter_ = std::make_unique<EkfSlam>(params_.filter, CameraModel(*intrinsics_), *extrinsics_);
-      tracker_ = std::make_unique<FeatureTracker>(CameraModel(*intrinsics_), params_.tracker);
+      // Tracker and filter share the camera of the tracked (possibly shrunk) image.
+      const CameraModel camera(trackingIntrinsics(*intrinsics_, params_.tracker.max_image_width_px));
+      filter_ = std::make_unique<EkfSlam>(params_.filter, camera, *extrinsics_);
+      tracker_ = std::make_unique<FeatureTracker>(camera, params_.tracker);
     } catch (const std::exception& e) {
       reportProblem(std::string("cannot start the filter: ") + e.what());
       filter_.reset();
@@ -148,6 +150,7 @@ void EkfSlamProcessor::tryInitialize(double t_now) {
   init.timestamp = static_result_->timestamp;
   init.q_n_b = static_result_->q_n_b;
   init.b_g = static_result_->b_g;
+  init.b_a = static_result_->b_a;
   filter_->initialize(init);
   prev_q_n_b_.reset();
   ROS_INFO("vi_ekf_slam: initialized from a %.1f s static interval (accel std %.3f m/s^2, gyro std %.4f rad/s)",
@@ -249,7 +252,7 @@ void EkfSlamProcessor::processQueue() {
   }
 }
 
-void EkfSlamProcessor::processImage(const PendingImage& img) {
+void EkfSlamProcessor::processImage(PendingImage& img) {
   const auto tic = std::chrono::steady_clock::now();
   if (!filter_->propagateTo(filter_->imuTime(img.t))) {
     ++counters_.images_late;
@@ -264,6 +267,7 @@ void EkfSlamProcessor::processImage(const PendingImage& img) {
     R_cur_prev = R_b_c.transpose() * R_b * R_b_c;
   }
   const auto tracker_tic = std::chrono::steady_clock::now();
+  img.mono = toTrackingResolution(img.mono, tracker_->camera().intrinsics());
   const CameraFrame frame = tracker_->track(img.t, img.mono, R_cur_prev);
   last_tracker_ms_ = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - tracker_tic).count();
   last_tracks_ = tracker_->stats().total;

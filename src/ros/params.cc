@@ -299,6 +299,8 @@ std::string loadParams(const ParamSource& source, NodeParams* out) {
   rd("zero_velocity_moving_speed_mps", f.zero_velocity.moving_speed_mps);
   rd("camera_time_offset_s", f.camera_time_offset_s);
   rd("initial_sigma_time_offset_s", f.initial.time_offset_s);
+  rd("max_image_width_px", p.tracker.max_image_width_px);
+  rd("camera_readout_time_s", f.update.readout_time_s);
   StaticInitParams& s = p.static_init;
   rd("static_window_s", s.window_s);
   rd("static_max_accel_std_mps2", s.max_accel_std_mps2);
@@ -385,9 +387,11 @@ std::string describeParams(const NodeParams& p) {
     << " min_distance_px=" << t.min_distance_px << " quality_level=" << t.quality_level
     << " fast_threshold=" << t.fast_threshold << " klt_window_px=" << t.klt_window_px
     << " klt_pyramid_levels=" << t.klt_pyramid_levels << " fb_threshold_px=" << t.fb_threshold_px
-    << " ransac_threshold_px=" << t.ransac_threshold_px << " redetect_fraction=" << t.redetect_fraction << "\n"
-    << "  camera: time_offset " << f.camera_time_offset_s << " [s] (t_imu = t_image + offset), calibration_file='"
-    << n.camera_calibration_file << "', extrinsic_source=" << n.extrinsic_source << "\n"
+    << " ransac_threshold_px=" << t.ransac_threshold_px << " redetect_fraction=" << t.redetect_fraction
+    << " max_image_width_px=" << t.max_image_width_px << " [px]\n"
+    << "  camera: time_offset " << f.camera_time_offset_s << " [s] (t_imu = t_image + offset), readout time "
+    << f.update.readout_time_s << " [s] (0: global shutter), calibration_file='" << n.camera_calibration_file
+    << "', extrinsic_source=" << n.extrinsic_source << "\n"
     << "  sync: max_image_queue=" << n.max_image_queue << " time_jump_reset_s=" << n.time_jump_reset_s
     << " [s] path_max_length=" << n.path_max_length << " max_image_gap_s=" << n.max_image_gap_s << " [s]";
   if (n.extrinsic_source == "parameters" && n.T_b_c.size() == 7) {

@@ -256,4 +256,46 @@ TEST(FeatureTracker, ImagesOfAnotherSizeOrWithoutTextureRestartTracking) {
 }
 
 }  // namespace
+TEST(FeatureTracker, WideImagesAreTrackedShrunkWithTheirOwnIntrinsics) {
+  // A 1280x720 camera tracked at max_image_width_px 800: a bright spot rendered at the projection
+  // of a 3D point in the full image lands, after toTrackingResolution, where the tracking
+  // intrinsics project the same point (the pixel-centre convention of cv::resize).
+  CameraIntrinsics full;
+  full.width = 1280;
+  full.height = 720;
+  full.fx = 906.26;
+  full.fy = 906.55;
+  full.cx = 642.9;
+  full.cy = 353.14;
+  const CameraIntrinsics t = trackingIntrinsics(full, 800);
+  EXPECT_EQ(t.width, 800);
+  EXPECT_EQ(t.height, 450);
+  EXPECT_TRUE(t.validate().empty());
+  // Not wider than the bound, or no bound: unchanged.
+  EXPECT_EQ(trackingIntrinsics(full, 1280).fx, full.fx);
+  EXPECT_EQ(trackingIntrinsics(full, 0).width, 1280);
+  const CameraModel cam_full(full), cam_t(t);
+  for (const Eigen::Vector3d p_c : {Eigen::Vector3d(0.31, -0.17, 2.0), Eigen::Vector3d(-0.9, 0.4, 1.5)}) {
+    Eigen::Vector2d uv_full, uv_t;
+    ASSERT_TRUE(cam_full.project(p_c, &uv_full));
+    ASSERT_TRUE(cam_t.project(p_c, &uv_t));
+    cv::Mat img(full.height, full.width, CV_32F);
+    for (int r = 0; r < img.rows; ++r) {
+      for (int c = 0; c < img.cols; ++c) {
+        const double d2 = std::pow(c - uv_full.x(), 2) + std::pow(r - uv_full.y(), 2);
+        img.at<float>(r, c) = static_cast<float>(200.0 * std::exp(-d2 / (2.0 * 4.0 * 4.0)));
+      }
+    }
+    cv::Mat img8;
+    img.convertTo(img8, CV_8U);
+    const cv::Mat small = toTrackingResolution(img8, t);
+    ASSERT_EQ(small.cols, 800);
+    ASSERT_EQ(small.rows, 450);
+    const cv::Moments m = cv::moments(small);
+    EXPECT_NEAR(m.m10 / m.m00, uv_t.x(), 0.05);
+    EXPECT_NEAR(m.m01 / m.m00, uv_t.y(), 0.05);
+  }
+  EXPECT_EQ(toTrackingResolution(cv::Mat(450, 800, CV_8U, cv::Scalar(0)), t).cols, 800);
+}
+
 }  // namespace vi_ekf_slam

@@ -32,6 +32,24 @@ TEST(StaticInitializer, RecoversRollPitchAndGyroBias) {
   EXPECT_LT((r->b_g - bg).norm(), 1e-3);
 }
 
+TEST(StaticInitializer, AccelBiasAlongGravityFromTheMagnitude) {
+  // An accelerometer that reads 9.93 m/s^2 at rest under 9.81 (as the real hand-held rig does):
+  // the bias component along gravity is observable at rest, the horizontal one is not (it tilts
+  // roll and pitch instead), so the initializer returns exactly the vertical part.
+  const Quat q_true = expQuat(Vec3(0.2, 0.4, -0.7));
+  const Vec3 down_b = q_true.conjugate() * Vec3::UnitZ();
+  const Vec3 ba_vertical = -0.12 * down_b;  // along the specific force (up), 0.12 m/s^2
+  const Vec3 f = -(q_true.conjugate() * gravityInNav(9.81)) + ba_vertical;
+  StaticInitializer init;
+  std::optional<StaticInitResult> r;
+  for (int k = 0; k < 400 && !r; ++k) r = init.addImu({0.005 * k, Vec3::Zero(), f});
+  ASSERT_TRUE(r.has_value());
+  EXPECT_LT((r->b_a - ba_vertical).norm(), 1e-9);
+  // Integrating the bias-corrected specific force with the estimated attitude gives no motion.
+  const Vec3 a_n = r->q_n_b * (f - r->b_a) + gravityInNav(9.81);
+  EXPECT_LT(a_n.norm(), 1e-9);
+}
+
 TEST(StaticInitializer, WaitsWhileMoving) {
   StaticInitializer init;
   for (int k = 0; k < 1000; ++k) {

@@ -16,6 +16,10 @@ struct UpdateParams {
   /// Linearizations per update [count]: 1 is the EKF, more the iterated EKF (the gate uses the
   /// first); the iterations stop early once the correction no longer changes.
   int iterations = 1;
+  /// Rolling shutter: time from the first to the last image row [s] (0: global shutter). A
+  /// feature in row v is seen readout_time_s * (v / height - 1/2) after the image's middle row,
+  /// the time the state is at; its prediction moves by its image velocity over that interval.
+  double readout_time_s = 0.0;
 };
 
 struct UpdateResult {

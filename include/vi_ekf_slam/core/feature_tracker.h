@@ -33,10 +33,22 @@ struct TrackerParams {
   /// [ratio]; 1 searches in every image that lost a track. The search is most of the tracker's
   /// time: 0.9 cut tracking by 27-39% on the hallway bags, with 4% fewer tracks (bench/README.md).
   double redetect_fraction = 1.0;
+  /// Images wider than this are shrunk to this width before tracking [px]; 0 tracks at full
+  /// size. Every pixel quantity of the tracker and of the filter (thresholds, pixel noise,
+  /// parallax) then refers to the shrunk image. Set at start-up.
+  int max_image_width_px = 800;
   /// Empty if usable, otherwise what is wrong.
   std::string validate() const;
 };
 std::optional<TrackerParams::Detector> detectorFromString(const std::string& s);
+
+/// The intrinsics of the image the tracker works on: `full` itself, or, when it is wider than
+/// max_width_px (> 0), the image shrunk to that width by cv::resize (pixel centres map as
+/// u' = (u + 0.5) * s - 0.5, so fx and cx scale with s; distortion acts on normalized
+/// coordinates and is unchanged).
+CameraIntrinsics trackingIntrinsics(const CameraIntrinsics& full, int max_width_px);
+/// `img` at the size of `tracking` (area interpolation; the same Mat when it already is).
+cv::Mat toTrackingResolution(const cv::Mat& img, const CameraIntrinsics& tracking);
 
 struct TrackerStats {
   int tracked = 0;          ///< tracks continued from the previous image
@@ -58,6 +70,8 @@ class FeatureTracker {
 
   const TrackerStats& stats() const { return stats_; }
   const TrackerParams& params() const { return params_; }
+  /// The camera of the images it tracks (see trackingIntrinsics).
+  const CameraModel& camera() const { return camera_; }
   void setParams(const TrackerParams& params) { params_ = params; }
   /// Forgets every track (ids keep increasing).
   void reset();

@@ -97,7 +97,7 @@ class EkfSlamProcessor {
   bool cameraReady(const std::string& image_frame);
   void tryInitialize(double t_now);
   void processQueue();
-  void processImage(const PendingImage& img);
+  void processImage(PendingImage& img);
   void output(const PendingImage& img, const CameraFrame& frame, const FrameResult& r);
   void reportProblem(const std::string& what);
 
