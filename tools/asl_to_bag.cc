@@ -2,9 +2,11 @@
 // with the topics of a real rig (bag_io.h): camera_info from cam0/sensor.yaml, /tf_static from
 // its T_BS, IMU covariances from imu0/sensor.yaml, ground truth as /ground_truth/pose.
 //
-//   vi_ekf_slam_asl_to_bag --asl FOLDER/mav0 --out FILE [--imu-margin S]
+//   vi_ekf_slam_asl_to_bag --asl FOLDER/mav0 --out FILE [--imu-margin S] [--start S]
 // IMU samples outside the camera's time span (plus the margin, default 1 s) are left out, so a
-// short image sequence does not carry the whole IMU log.
+// short image sequence does not carry the whole IMU log. --start S cuts the recording S seconds
+// after its first image: images and IMU both begin there, as when a node is started mid-walk.
+#include <algorithm>
 #include <cstdio>
 #include <iostream>
 #include <opencv2/imgcodecs.hpp>
@@ -17,18 +19,26 @@ using namespace vi_ekf_slam;
 
 int main(int argc, char** argv) {
   std::string asl, out;
-  double margin = 1.0;
-  const std::string usage = "vi_ekf_slam_asl_to_bag --asl FOLDER/mav0 --out FILE [--imu-margin S]";
+  double margin = 1.0, start = 0.0;
+  const std::string usage = "vi_ekf_slam_asl_to_bag --asl FOLDER/mav0 --out FILE [--imu-margin S] [--start S]";
   cli::po::options_description opts("options");
   opts.add_options()("asl", cli::po::value(&asl)->required(), "the ASL folder (mav0 with cam0, imu0)")(
       "out", cli::po::value(&out)->required(), "the bag to write")(
-      "imu-margin", cli::po::value(&margin)->default_value(margin), "IMU kept around the images [s]");
+      "imu-margin", cli::po::value(&margin)->default_value(margin), "IMU kept around the images [s]")(
+      "start", cli::po::value(&start)->default_value(start),
+      "cut everything before this time after the first image [s] (images and IMU begin together)");
   cli::parse(argc, argv, usage, "Converts an ASL/EuRoC folder into a bag with the topics of a real rig.", opts);
   if (!(margin >= 0.0)) cli::fail(usage, "--imu-margin must be >= 0");
+  if (!(start >= 0.0)) cli::fail(usage, "--start must be >= 0");
   try {
     const eval::AslCamera cam = eval::readAslCamera(asl + "/cam0/sensor.yaml");
     const ImuNoiseParams noise = eval::readAslImuNoise(asl + "/imu0/sensor.yaml");
-    const std::vector<eval::AslImage> images = eval::readAslImages(asl + "/cam0");
+    std::vector<eval::AslImage> images = eval::readAslImages(asl + "/cam0");
+    if (start > 0.0 && !images.empty()) {
+      const double t_cut = images.front().t + start;
+      images.erase(images.begin(),
+                   std::find_if(images.begin(), images.end(), [&](const eval::AslImage& i) { return i.t >= t_cut; }));
+    }
     const std::vector<ImuData> imu = eval::readAslImu(asl + "/imu0/data.csv");
     std::vector<eval::AslState> gt;
     try {
@@ -37,7 +47,7 @@ int main(int argc, char** argv) {
       std::cerr << "warning: no ground truth (" << e.what() << ")\n";
     }
     if (images.empty()) throw std::runtime_error("no images in " + asl + "/cam0");
-    const double t0 = images.front().t - margin, t1 = images.back().t + margin;
+    const double t0 = images.front().t - (start > 0.0 ? 0.0 : margin), t1 = images.back().t + margin;
     const double imu_rate = imu.size() > 1 ? (imu.size() - 1) / (imu.back().timestamp - imu.front().timestamp) : 200.0;
     glue::RigBagWriter bag(out, glue::RigTopics(), CameraModel(cam.intrinsics), cam.T_b_c, noise, imu_rate,
                            ros::Time(std::max(t0, imu.front().timestamp)));

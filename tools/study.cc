@@ -62,6 +62,7 @@ struct Options {
   // landmarks in every configuration (default: the core's).
   std::string inverse_depth;
   double inverse_depth_initial_m = 0.0, inverse_depth_sigma = 0.0;
+  std::string depth_prior;    // "fixed" | "scene": the inverse-depth prior's centre; "": the core's default
   double gate = 0.0;          // chi^2 gate probability of every configuration; 0: the core's default
   int update_iterations = 0;  // linearizations per update of every configuration; 0: the core's default
   // +zero_velocity: "wait" (the core's default): new landmarks wait until the standing detector
@@ -102,7 +103,10 @@ Options parse(int argc, char** argv) {
       "wait | immediate: +zero_velocity configurations hold new tracks until the rig is seen moving, or not")(
       "update-iterations", po::value(&o.update_iterations)->default_value(o.update_iterations),
       "1: EKF update, more: iterated update, every configuration (0: default)")(
-      "inverse-depth", po::value(&o.inverse_depth), "INITIAL_DEPTH_M,SIGMA_PER_M of new inverse-depth landmarks");
+      "inverse-depth", po::value(&o.inverse_depth), "INITIAL_DEPTH_M,SIGMA_PER_M of new inverse-depth landmarks")(
+      "depth-prior", po::value(&o.depth_prior),
+      "fixed | scene: new inverse-depth landmarks start at INITIAL_DEPTH_M, or at the median depth of the landmarks "
+      "seen (default: the core's)");
   const po::variables_map vm = cli::parse(argc, argv, kUsage,
                                           "Monte-Carlo consistency study (paper Sec. IV-A): M runs of each filter "
                                           "configuration on the built-in hallway walk or a TUM trajectory.",
@@ -122,6 +126,9 @@ Options parse(int argc, char** argv) {
       (std::sscanf(o.inverse_depth.c_str(), "%lf,%lf", &o.inverse_depth_initial_m, &o.inverse_depth_sigma) != 2 ||
        !(o.inverse_depth_initial_m > 0.0) || !(o.inverse_depth_sigma > 0.0))) {
     usage("--inverse-depth needs INITIAL_DEPTH_M,SIGMA_PER_M (both > 0)");
+  }
+  if (!o.depth_prior.empty() && o.depth_prior != "fixed" && o.depth_prior != "scene") {
+    usage("--depth-prior must be fixed or scene");
   }
   if (!o.preset.empty() && o.preset != "openvins_sim") usage("unknown --preset '" + o.preset + "'");
   if (!o.preset.empty() && (o.trajectory == "builtin" || !o.imu.empty())) usage("--preset needs a TUM --trajectory");
@@ -148,6 +155,7 @@ EkfSlamConfig withStudyOptions(EkfSlamConfig c, const Options& o, const sim::Sce
     c.inverse_depth_sigma = o.inverse_depth_sigma;
   }
   if (o.update_iterations > 0) c.update.iterations = o.update_iterations;
+  if (!o.depth_prior.empty()) c.inverse_depth_scene_prior = o.depth_prior == "scene";
   // The recorded IMU is EuRoC's MAV: standing on the ground it does not sway like a pedestrian.
   if (!o.imu.empty()) c.zero_velocity.velocity_sigma_mps = eval::kEurocMavStandingVelocitySigma;
   if (o.gate > 0.0) c.update.gate_probability = o.gate;

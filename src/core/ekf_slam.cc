@@ -40,9 +40,11 @@ void EkfSlam::reset() {
   seen_moving_ = false;
 }
 
-void EkfSlam::initialize(const NavState& init) {
+void EkfSlam::initialize(const NavState& init) { initialize(init, config_.initial); }
+
+void EkfSlam::initialize(const NavState& init, const InitialUncertainty& u, double scene_depth_m) {
+  scene_depth_hint_m_ = scene_depth_m > 0.0 && std::isfinite(scene_depth_m) ? scene_depth_m : 0.0;
   using namespace idx;
-  const InitialUncertainty& u = config_.initial;
   // Start world-centric: the initial pose uncertainty is the registration error in {n}.
   FilterState s(Mechanization::kWorldCentric);
   s.timestamp = init.timestamp;
@@ -145,7 +147,28 @@ void EkfSlam::addGapUncertainty(double dt) {
   state_.propagateCovariance(MotionMatrix::Identity(m, m), Q);
 }
 
-bool EkfSlam::initializeLandmark(const FeatureObservation& obs) {
+double EkfSlam::newLandmarkDepth() const {
+  if (!config_.inverse_depth_scene_prior) return config_.inverse_depth_initial_m;
+  const double fallback = scene_depth_hint_m_ > 0.0 ? scene_depth_hint_m_ : config_.inverse_depth_initial_m;
+  const Mat3 R_s_c = state_.x.q_s_b.toRotationMatrix() * T_b_c_.R_b_c;
+  const Vec3 p_s_c = state_.x.p_s_b + state_.x.q_s_b * T_b_c_.p_b_c;
+  const double max_var = 0.25 * config_.inverse_depth_sigma * config_.inverse_depth_sigma;
+  std::vector<double> depths;
+  for (int i = 0; i < state_.numLandmarks(); ++i) {
+    const Landmark& lm = state_.landmark(i);
+    if (lm.kind != LandmarkKind::kInverseDepth) continue;
+    const int c = state_.landmarkIndex(i);
+    if (!(state_.covariance()(c + 2, c + 2) < max_var)) continue;
+    const double z = (R_s_c.transpose() * (lm.position() - p_s_c)).z();
+    if (z > 0.0 && std::isfinite(z)) depths.push_back(z);
+  }
+  if (depths.size() < 10) return fallback;
+  auto mid = depths.begin() + static_cast<std::ptrdiff_t>(depths.size() / 2);
+  std::nth_element(depths.begin(), mid, depths.end());
+  return *mid;
+}
+
+bool EkfSlam::initializeLandmark(const FeatureObservation& obs, double inverse_depth_initial_m) {
   switch (config_.landmark_init) {
     case LandmarkInitMethod::kFixedDepth: {
       FixedDepthParams p;
@@ -156,7 +179,7 @@ bool EkfSlam::initializeLandmark(const FeatureObservation& obs) {
     }
     case LandmarkInitMethod::kInverseDepth: {
       InverseDepthParams p;
-      p.initial_depth_m = config_.inverse_depth_initial_m;
+      p.initial_depth_m = inverse_depth_initial_m;
       p.inverse_depth_sigma = config_.inverse_depth_sigma;
       p.pixel_noise_px = config_.update.pixel_noise_px;
       return initializeLandmarkInverseDepth(state_, obs, camera_, T_b_c_, p);
@@ -265,9 +288,10 @@ FrameResult EkfSlam::processFrame(const CameraFrame& camera_frame) {
   removeLandmarksById(drop);
   r.removed_ids = drop;
 
+  const double new_depth_m = fresh.empty() ? 0.0 : newLandmarkDepth();
   for (const auto& f : fresh) {
     if (state_.numLandmarks() >= config_.max_landmarks) break;
-    if (initializeLandmark(f)) {
+    if (initializeLandmark(f, new_depth_m)) {
       r.new_ids.push_back(f.id);
       last_seen_[f.id] = frame.timestamp;
     }

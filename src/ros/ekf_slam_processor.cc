@@ -3,6 +3,7 @@
 #include <camera_calibration_parsers/parse.h>
 #include <chrono>
 #include <ros/console.h>
+#include <sstream>
 #include <stdexcept>
 #include <tf2/exceptions.h>
 
@@ -48,6 +49,8 @@ void EkfSlamProcessor::reset(const std::string& reason) {
   if (tracker_) tracker_->reset();
   static_init_.reset();
   static_result_.reset();
+  if (dynamic_init_) dynamic_init_->reset();
+  first_uninitialized_image_t_.reset();
   queue_.clear();
   births_.clear();
   prev_q_n_b_.reset();
@@ -133,6 +136,10 @@ bool EkfSlamProcessor::cameraReady(const std::string& image_frame) {
       const CameraModel camera(trackingIntrinsics(*intrinsics_, params_.tracker.max_image_width_px));
       filter_ = std::make_unique<EkfSlam>(params_.filter, camera, *extrinsics_);
       tracker_ = std::make_unique<FeatureTracker>(camera, params_.tracker);
+      DynamicInitParams dp = params_.dynamic_init;
+      dp.pixel_noise_px = params_.filter.update.pixel_noise_px;
+      dp.time_offset_sigma_s = params_.filter.initial.time_offset_s;
+      dynamic_init_ = std::make_unique<DynamicInitializer>(dp, camera, *extrinsics_);
     } catch (const std::exception& e) {
       reportProblem(std::string("cannot start the filter: ") + e.what());
       filter_.reset();
@@ -155,7 +162,8 @@ void EkfSlamProcessor::tryInitialize(double t_now) {
   prev_q_n_b_.reset();
   ROS_INFO("vi_ekf_slam: initialized from a %.1f s static interval (accel std %.3f m/s^2, gyro std %.4f rad/s)",
            params_.static_init.window_s, static_result_->accel_std_mps2, static_result_->gyro_std_radps);
-  sink_.event("initialized");
+  sink_.event("initialized: static, " + std::to_string(params_.static_init.window_s) + " s at rest");
+  first_uninitialized_image_t_.reset();
 }
 
 void EkfSlamProcessor::imu(const sensor_msgs::Imu& msg) {
@@ -182,6 +190,7 @@ void EkfSlamProcessor::imu(const sensor_msgs::Imu& msg) {
   last_imu_t_ = d->timestamp;
   last_gyro_ = d->wm;
   if (auto r = static_init_.addImu(*d)) static_result_ = r;
+  if (dynamic_init_ && filter_ && !filter_->initialized()) dynamic_init_->addImu(*d);
   if (filter_) {
     filter_->addImu(*d);
     tryInitialize(d->timestamp);
@@ -222,7 +231,11 @@ void EkfSlamProcessor::image(const sensor_msgs::Image& msg) {
   }
   if (!filter_->initialized()) {
     ++counters_.images_before_init;
-    reportProblem("waiting for a static IMU interval to initialize");
+    if (params_.dynamic_init_enabled) {
+      tryDynamicInitialize(img);
+    } else {
+      reportProblem("waiting for a static IMU interval to initialize");
+    }
     return;
   }
   if (filter_->imuTime(t) < filter_->state().timestamp) {
@@ -237,6 +250,37 @@ void EkfSlamProcessor::image(const sensor_msgs::Image& msg) {
     reportProblem("image dropped: no IMU data past its stamp");
   }
   processQueue();
+}
+
+void EkfSlamProcessor::tryDynamicInitialize(PendingImage& img) {
+  if (!first_uninitialized_image_t_) first_uninitialized_image_t_ = img.t;
+  // The tracks it aligns are the tracks the filter goes on with: the same tracker, no gyro seed
+  // (no attitude yet). Frames are on the IMU clock through the configured time offset.
+  img.mono = toTrackingResolution(img.mono, tracker_->camera().intrinsics());
+  CameraFrame frame = tracker_->track(img.t, img.mono, std::nullopt);
+  last_tracks_ = tracker_->stats().total;
+  frame.timestamp = filter_->imuTime(img.t);
+  dynamic_init_->addFrame(frame);
+  std::string why;
+  const std::optional<DynamicInitResult> r = dynamic_init_->tryInitialize(&why);
+  if (!r) {
+    reportProblem("waiting to initialize: at rest for " + std::to_string(params_.static_init.window_s) +
+                  " s, or moving: " + why);
+    return;
+  }
+  if (r->state.timestamp < filter_->latestImuTime() - 1.0) return;  // the IMU no longer covers it
+  filter_->initialize(r->state, r->uncertainty(params_.filter.initial), r->median_depth_m);
+  prev_q_n_b_ = r->state.q_n_b;
+  last_processed_t_ = img.t;
+  std::ostringstream e;
+  e.precision(3);
+  e << "initialized: dynamic, " << (img.t - *first_uninitialized_image_t_) << " s after the first image (" << r->frames
+    << " images, " << r->features << " features, velocity sigma " << r->velocity_sigma_mps << " m/s, roll/pitch sigma "
+    << r->tilt_sigma_rad << " rad, median depth " << r->median_depth_m << " m)";
+  ROS_INFO_STREAM("vi_ekf_slam: " << e.str());
+  sink_.event(e.str());
+  first_uninitialized_image_t_.reset();
+  static_result_.reset();
 }
 
 void EkfSlamProcessor::processQueue() {

@@ -301,11 +301,20 @@ std::string loadParams(const ParamSource& source, NodeParams* out) {
   rd("initial_sigma_time_offset_s", f.initial.time_offset_s);
   rd("max_image_width_px", p.tracker.max_image_width_px);
   rd("camera_readout_time_s", f.update.readout_time_s);
+  rd("inverse_depth_scene_prior", f.inverse_depth_scene_prior);
   StaticInitParams& s = p.static_init;
   rd("static_window_s", s.window_s);
+  rd("dynamic_init", p.dynamic_init_enabled);
+  DynamicInitParams& di = p.dynamic_init;
+  rd("dynamic_init_window_s", di.window_s);
+  rd("dynamic_init_max_velocity_sigma_mps", di.max_velocity_sigma_mps);
+  rd("dynamic_init_max_tilt_sigma_rad", di.max_tilt_sigma_rad);
+  rd("dynamic_init_gyro_bias_sigma_radps", di.gyro_bias_sigma_radps);
   rd("static_max_accel_std_mps2", s.max_accel_std_mps2);
   rd("static_max_gyro_std_radps", s.max_gyro_std_radps);
   s.gravity_mps2 = f.gravity_mps2;
+  di.gravity_mps2 = f.gravity_mps2;
+  di.pixel_noise_px = f.update.pixel_noise_px;
   NodeOptions& n = p.node;
   rd("world_frame", n.world_frame);
   rd("body_frame", n.body_frame);
@@ -337,6 +346,7 @@ std::string loadParams(const ParamSource& source, NodeParams* out) {
   if (n.path_max_length < 1) err << "path_max_length must be >= 1\n";
   if (!(n.max_image_gap_s > 0.0)) err << "max_image_gap_s must be > 0 [s]\n";
   if (!(s.window_s > 0.05)) err << "static_window_s must be > 0.05 s\n";
+  err << di.validate();
   if (!(s.max_accel_std_mps2 > 0.0) || !(s.max_gyro_std_radps > 0.0)) {
     err << "static_max_accel_std_mps2 and static_max_gyro_std_radps must be > 0\n";
   }
@@ -357,7 +367,8 @@ std::string describeParams(const NodeParams& p) {
     << "  landmark_init=" << toString(f.landmark_init) << " landmark_depth_m=" << f.landmark_depth_m
     << " [m] landmark_depth_sigma_m=" << f.landmark_depth_sigma_m
     << " [m] inverse_depth_initial_m=" << f.inverse_depth_initial_m
-    << " [m] inverse_depth_sigma=" << f.inverse_depth_sigma << " [1/m]\n"
+    << " [m] inverse_depth_sigma=" << f.inverse_depth_sigma
+    << " [1/m] inverse_depth_scene_prior=" << f.inverse_depth_scene_prior << "\n"
     << "  max_landmarks=" << f.max_landmarks << " landmark_timeout_s=" << f.landmark_timeout_s
     << " [s] pixel_noise_px=" << f.update.pixel_noise_px << " [px] gate_probability=" << f.update.gate_probability
     << "\n"
@@ -383,6 +394,10 @@ std::string describeParams(const NodeParams& p) {
     << f.divergence.window_s << " [s]\n"
     << "  static init: window " << p.static_init.window_s << " [s], accel std < " << p.static_init.max_accel_std_mps2
     << " [m/s^2], gyro std < " << p.static_init.max_gyro_std_radps << " [rad/s]\n"
+    << "  dynamic init: " << (p.dynamic_init_enabled ? "on" : "off") << ", window " << p.dynamic_init.window_s
+    << " [s], velocity sigma <= " << p.dynamic_init.max_velocity_sigma_mps
+    << " [m/s], roll/pitch sigma <= " << p.dynamic_init.max_tilt_sigma_rad << " [rad], gyro bias sigma "
+    << p.dynamic_init.gyro_bias_sigma_radps << " [rad/s]\n"
     << "  tracker: detector=" << detectorName(t.detector) << " max_tracks=" << t.max_tracks
     << " min_distance_px=" << t.min_distance_px << " quality_level=" << t.quality_level
     << " fast_threshold=" << t.fast_threshold << " klt_window_px=" << t.klt_window_px

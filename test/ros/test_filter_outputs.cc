@@ -11,6 +11,7 @@
 //   expect_event        a substring that must appear on the events topic
 //   min_resets          minimum "resets" reported by the status
 //   call_reset_at_s     call the reset service this long after the first odometry [s]; <0: never
+//   max_reinit_s        after that reset, odometry must be back within this much stream time [s]; 0: not checked
 //   switch_at_s         switch the mechanization this long after the first odometry [s]; <0: never
 //   switch_to           the mechanization to switch to
 #include <diagnostic_msgs/DiagnosticArray.h>
@@ -61,7 +62,7 @@ Eigen::Vector3d pos(const geometry_msgs::Point& p) { return {p.x, p.y, p.z}; }
 
 TEST(FilterNode, BehavesOnThisInputStream) {
   ros::NodeHandle nh, pnh("~");
-  double listen_s = 15, min_hz = 15, max_err = 0, reset_at = -1, switch_at = -1;
+  double listen_s = 15, min_hz = 15, max_err = 0, reset_at = -1, switch_at = -1, max_reinit = 0;
   bool expect_odom = true;
   int min_level = 0, min_resets = 0;
   std::string diag_nonzero, diag_zero, expect_event, switch_to = "world_centric";
@@ -75,6 +76,7 @@ TEST(FilterNode, BehavesOnThisInputStream) {
   pnh.param("expect_event", expect_event, expect_event);
   pnh.param("min_resets", min_resets, min_resets);
   pnh.param("call_reset_at_s", reset_at, reset_at);
+  pnh.param("max_reinit_s", max_reinit, max_reinit);
   pnh.param("switch_at_s", switch_at, switch_at);
   pnh.param("switch_to", switch_to, switch_to);
 
@@ -135,7 +137,7 @@ TEST(FilterNode, BehavesOnThisInputStream) {
   const ros::WallTime start = ros::WallTime::now();
   ros::WallTime first_odom, end_seen;
   bool reset_done = false, switch_done = false;
-  double switch_stamp = 0.0;
+  double switch_stamp = 0.0, reset_stamp = 0.0;
   while (ros::ok() && (ros::WallTime::now() - start).toSec() < listen_s + kMaxDelayS) {
     ros::WallDuration(0.05).sleep();
     double last_stamp = 0.0, end = 0.0;
@@ -158,6 +160,7 @@ TEST(FilterNode, BehavesOnThisInputStream) {
       EXPECT_TRUE(ros::service::call("/vi_ekf_slam/filter/reset", srv));
       EXPECT_TRUE(srv.response.success);
       reset_done = true;
+      reset_stamp = last_stamp;
     }
     if (switch_at >= 0 && !switch_done && since > switch_at) {
       dynamic_reconfigure::Client<vi_ekf_slam::EkfSlamReconfigureConfig> client("/vi_ekf_slam/filter");
@@ -263,8 +266,21 @@ TEST(FilterNode, BehavesOnThisInputStream) {
     EXPECT_TRUE(reset_done);
     // After the reset the filter re-initialized and published again.
     int inits = 0;
-    for (const auto& e : rec.events) inits += e == "initialized";
+    for (const auto& e : rec.events) inits += e.rfind("initialized", 0) == 0;
     EXPECT_GE(inits, 2) << "the filter did not initialize again after the reset";
+    if (max_reinit > 0.0) {
+      // The longest silence of the odometry from just before the reset on (stream time).
+      double gap = 0.0, prev = reset_stamp - 0.5;
+      for (const auto& o : rec.odom) {
+        const double t = o.header.stamp.toSec();
+        if (t < prev) continue;
+        gap = std::max(gap, t - prev);
+        prev = t;
+      }
+      std::printf("odometry back %.2f s after the reset\n", gap);
+      ::testing::Test::RecordProperty("reinit_ms", static_cast<int>(1e3 * gap));
+      EXPECT_LT(gap, max_reinit) << "no odometry for " << gap << " s after the reset";
+    }
   }
   if (switch_at >= 0) {
     ASSERT_TRUE(switch_done);

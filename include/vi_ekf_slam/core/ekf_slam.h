@@ -40,6 +40,9 @@ class EkfSlam {
   /// Starts the filter at a known pose, velocity and biases in {n} at initial.timestamp; the
   /// covariance comes from config().initial. IMU samples buffered so far are kept.
   void initialize(const NavState& initial);
+  /// The same with another initial uncertainty (a dynamic initialization's) and, if > 0, the
+  /// depth the scene was seen at [m]: new landmarks start there until the map knows its own.
+  void initialize(const NavState& initial, const InitialUncertainty& uncertainty, double scene_depth_m = 0.0);
   bool initialized() const { return initialized_; }
   /// Forgets state, map and IMU buffer.
   void reset();
@@ -83,7 +86,9 @@ class EkfSlam {
 
  private:
   void removeLandmarksById(const std::vector<std::int64_t>& ids);
-  bool initializeLandmark(const FeatureObservation& obs);
+  bool initializeLandmark(const FeatureObservation& obs, double inverse_depth_initial_m);
+  /// Prior depth of new inverse-depth landmarks [m] (see inverse_depth_scene_prior).
+  double newLandmarkDepth() const;
   bool shouldCompose(int new_landmarks) const;
   /// The estimated speed exceeds zero_velocity.moving_speed_mps by two standard deviations.
   bool confidentlyMoving() const;
@@ -95,6 +100,7 @@ class EkfSlam {
   Vec3 g_n_;
   FilterState state_;
   bool initialized_ = false;
+  double scene_depth_hint_m_ = 0.0;  ///< see initialize(); 0: none
   std::deque<ImuData> imu_;
   std::deque<ImuData> recent_imu_;  ///< samples since the last frame's rest window (bounded by imu_buffer_max)
   std::unordered_map<std::int64_t, double> last_seen_;

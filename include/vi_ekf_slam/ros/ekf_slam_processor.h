@@ -18,6 +18,7 @@
 #include "vi_ekf_slam/FilterStatus.h"
 #include "vi_ekf_slam/core/ekf_slam.h"
 #include "vi_ekf_slam/core/feature_tracker.h"
+#include "vi_ekf_slam/core/dynamic_initializer.h"
 #include "vi_ekf_slam/core/static_initializer.h"
 #include "vi_ekf_slam/ros/params.h"
 #include <nav_msgs/Odometry.h>
@@ -96,6 +97,8 @@ class EkfSlamProcessor {
 
   bool cameraReady(const std::string& image_frame);
   void tryInitialize(double t_now);
+  /// While not initialized and not at rest: tracks the image and tries the dynamic initializer.
+  void tryDynamicInitialize(PendingImage& img);
   void processQueue();
   void processImage(PendingImage& img);
   void output(const PendingImage& img, const CameraFrame& frame, const FrameResult& r);
@@ -108,6 +111,8 @@ class EkfSlamProcessor {
   std::optional<CameraExtrinsics> extrinsics_;
   std::unique_ptr<EkfSlam> filter_;
   std::unique_ptr<FeatureTracker> tracker_;
+  std::unique_ptr<DynamicInitializer> dynamic_init_;
+  std::optional<double> first_uninitialized_image_t_;  ///< when waiting for initialization began [s]
   StaticInitializer static_init_;
   std::optional<StaticInitResult> static_result_;
   std::deque<PendingImage> queue_;

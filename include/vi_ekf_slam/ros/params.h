@@ -10,6 +10,7 @@
 #include "vi_ekf_slam/EkfSlamReconfigureConfig.h"
 #include "vi_ekf_slam/core/ekf_slam_config.h"
 #include "vi_ekf_slam/core/feature_tracker.h"
+#include "vi_ekf_slam/core/dynamic_initializer.h"
 #include "vi_ekf_slam/core/static_initializer.h"
 
 namespace vi_ekf_slam::glue {
@@ -32,6 +33,8 @@ struct NodeParams {
   EkfSlamConfig filter;
   TrackerParams tracker;
   StaticInitParams static_init;
+  bool dynamic_init_enabled = true;  ///< also initialize while moving (visual-inertial alignment)
+  DynamicInitParams dynamic_init;
   NodeOptions node;
 };
 

@@ -1,0 +1,80 @@
+// Initialization while moving (visual-inertial alignment): from a short window of IMU samples
+// and feature tracks, a linear least-squares problem in the first body frame {I0} gives the
+// velocity, the gravity vector and every feature's position at once (closed form, as OpenVINS's
+// dynamic initializer and Martinelli's closed-form solution): with the attitude from the gyro and
+// the IMU's position increments alpha_k, the camera at frame k sees feature f at
+//   p_c = R_c_k (p_f - v_0 t_k - g t_k^2 / 2 - alpha_k) - R_b_c^T p_b_c,
+// and each normalized observation (x, y) gives two equations linear in (p_f, v_0, g):
+//   p_c.x - x p_c.z = 0,  p_c.y - y p_c.z = 0.
+// |g| is then imposed (a Lagrange multiplier on the reduced 3x3 problem). The covariance of the
+// solution gives the initial uncertainty of velocity and roll/pitch; when it is too large (the rig
+// rotates in place, moves at constant velocity, or sees too little parallax) it waits and says why.
+#pragma once
+
+#include <deque>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "vi_ekf_slam/core/camera_model.h"
+#include "vi_ekf_slam/core/ekf_slam_config.h"
+#include "vi_ekf_slam/core/navigation_output.h"
+#include "vi_ekf_slam/core/types.h"
+
+namespace vi_ekf_slam {
+
+struct DynamicInitParams {
+  double window_s = 1.0;                 ///< span of the frames used [s]
+  int min_frames = 6;                    ///< frames in the window [count]
+  int min_features = 12;                 ///< features seen in >= min_observations frames [count]
+  int min_observations = 4;              ///< frames a feature must be seen in to be used [count]
+  double max_velocity_sigma_mps = 0.15;  ///< refuse when the velocity is known worse than this [m/s]
+  double max_tilt_sigma_rad = 0.035;     ///< refuse when roll/pitch is known worse than this [rad]
+  double gyro_bias_sigma_radps = 0.01;   ///< initial std-dev of the (unknown) gyro bias [rad/s]
+  double time_offset_sigma_s = 0.05;     ///< std-dev of the camera-IMU time offset it assumes [s]
+  double pixel_noise_px = 1.0;           ///< std-dev of a feature position [px]
+  double gravity_mps2 = 9.81;            ///< local gravity [m/s^2]
+  std::string validate() const;
+};
+
+struct DynamicInitResult {
+  NavState state;                      ///< at the last frame of the window (p = 0, yaw = 0), on the IMU clock
+  double velocity_sigma_mps = 0.0;     ///< std-dev of the velocity (largest axis) [m/s]
+  double tilt_sigma_rad = 0.0;         ///< std-dev of roll and pitch (largest) [rad]
+  double gyro_bias_sigma_radps = 0.0;  ///< the gyro bias is not estimated: its prior std-dev [rad/s]
+  /// `base` with the velocity, roll/pitch and gyro-bias uncertainty of this result.
+  InitialUncertainty uncertainty(InitialUncertainty base) const {
+    base.velocity_mps = velocity_sigma_mps;
+    base.roll_pitch_rad = tilt_sigma_rad;
+    base.gyro_bias_radps = gyro_bias_sigma_radps;
+    return base;
+  }
+  int frames = 0;                ///< frames used
+  int features = 0;              ///< features used
+  double median_depth_m = 0.0;   ///< of the features in the last frame
+  double residual_rms_px = 0.0;  ///< of the alignment
+};
+
+class DynamicInitializer {
+ public:
+  DynamicInitializer(const DynamicInitParams& params, const CameraModel& camera, const CameraExtrinsics& T_b_c);
+
+  /// IMU samples in time order (others are ignored).
+  void addImu(const ImuData& imu);
+  /// A frame of tracks on the IMU clock (its stamp + the camera-IMU time offset).
+  void addFrame(const CameraFrame& frame);
+  /// Tries the alignment on the frames of the last window_s that the IMU covers. On failure
+  /// returns nothing and sets *why (what is missing or degenerate).
+  std::optional<DynamicInitResult> tryInitialize(std::string* why);
+  void reset();
+  const DynamicInitParams& params() const { return params_; }
+
+ private:
+  DynamicInitParams params_;
+  CameraModel camera_;
+  CameraExtrinsics T_b_c_;
+  std::deque<ImuData> imu_;
+  std::deque<CameraFrame> frames_;
+};
+
+}  // namespace vi_ekf_slam
