@@ -4,6 +4,7 @@
 #include <Eigen/Eigenvalues>
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <map>
 #include <sstream>
 
@@ -106,6 +107,7 @@ std::vector<Preintegrated> preintegrate(const std::deque<ImuData>& imu, const st
 struct Obs {
   int frame;
   Eigen::Vector2d xn;  ///< normalized undistorted coordinates
+  Eigen::Vector2d uv;  ///< pixel
 };
 
 }  // namespace
@@ -118,9 +120,10 @@ std::optional<DynamicInitResult> DynamicInitializer::tryInitialize(std::string* 
   if (imu_.size() < 2 || frames_.empty()) return fail("waiting for IMU and images");
   // Frames the IMU covers, in the last window_s.
   std::vector<const CameraFrame*> window;
+  const double search = params_.time_offset_search_s;
   for (auto it = frames_.rbegin(); it != frames_.rend(); ++it) {
-    if (it->timestamp > imu_.back().timestamp) continue;
-    if (it->timestamp < imu_.front().timestamp) break;
+    if (it->timestamp + search > imu_.back().timestamp) continue;
+    if (it->timestamp - search < imu_.front().timestamp) break;
     if (!window.empty() && window.back()->timestamp - it->timestamp > params_.window_s) break;
     window.insert(window.begin(), &*it);
   }
@@ -128,23 +131,35 @@ std::optional<DynamicInitResult> DynamicInitializer::tryInitialize(std::string* 
     return fail("collecting images (" + std::to_string(window.size()) + " of " + std::to_string(params_.min_frames) +
                 ")");
   }
-  std::vector<double> times;
-  for (const auto* f : window) times.push_back(f->timestamp);
-  const std::vector<Preintegrated> pre = preintegrate(imu_, times);
+  // A short span aligns poorly (velocity and gravity come from the curvature of the path): the
+  // images must span the window (within 10%).
+  if (window.back()->timestamp - window.front()->timestamp < 0.9 * params_.window_s) {
+    return fail("collecting images (" + std::to_string(window.back()->timestamp - window.front()->timestamp) +
+                " s of " + std::to_string(params_.window_s) + " s)");
+  }
+  std::vector<double> stamps, times;
+  for (const auto* f : window) stamps.push_back(f->timestamp);
+  std::vector<Preintegrated> pre;
 
   // Features seen often enough, longest tracks first (a bounded problem).
   std::map<std::int64_t, std::vector<Obs>> tracks;
   for (int k = 0; k < static_cast<int>(window.size()); ++k) {
     for (const auto& f : window[static_cast<size_t>(k)]->features) {
       Eigen::Vector2d xn;
-      if (f.uv.allFinite() && camera_.pixelToNormalized(f.uv, &xn)) tracks[f.id].push_back({k, xn});
+      if (f.uv.allFinite() && camera_.pixelToNormalized(f.uv, &xn)) tracks[f.id].push_back({k, xn, f.uv});
     }
   }
   std::vector<const std::vector<Obs>*> used;
+  std::map<const std::vector<Obs>*, std::int64_t> ids;
   for (const auto& [id, obs] : tracks) {
-    if (static_cast<int>(obs.size()) >= params_.min_observations) used.push_back(&obs);
+    if (static_cast<int>(obs.size()) >= params_.min_observations) {
+      used.push_back(&obs);
+      ids[&obs] = id;
+    }
   }
-  std::sort(used.begin(), used.end(), [](const auto* a, const auto* b) { return a->size() > b->size(); });
+  std::sort(used.begin(), used.end(), [&](const auto* a, const auto* b) {
+    return a->size() != b->size() ? a->size() > b->size() : ids[a] < ids[b];
+  });
   constexpr size_t kMaxFeatures = 80;
   if (used.size() > kMaxFeatures) used.resize(kMaxFeatures);
   if (static_cast<int>(used.size()) < params_.min_features) {
@@ -165,82 +180,139 @@ std::optional<DynamicInitResult> DynamicInitializer::tryInitialize(std::string* 
   std::vector<Vec3> p_f(M, Vec3::Zero());
   Vec6 y = Vec6::Zero();
   Mat6 S = Mat6::Zero();
+  std::vector<Mat3> Hff_inv;
   const double G = params_.gravity_mps2;
+  const double f_px = 0.5 * (camera_.intrinsics().fx + camera_.intrinsics().fy);
   auto cameraPoint = [&](int k, const Vec3& pf, const Vec6& yy) {
     const double t = times[static_cast<size_t>(k)] - times.front();
     const Preintegrated& P = pre[static_cast<size_t>(k)];
     const Vec3 p_k = yy.head<3>() * t + 0.5 * yy.tail<3>() * t * t + P.alpha;
     return Vec3(R_c_b * P.R.transpose() * (pf - p_k) + p_c_b);
   };
-  for (int pass = 0; pass < 2; ++pass) {
-    Mat6 Hyy = Mat6::Zero();
-    Vec6 by = Vec6::Zero();
-    for (int j = 0; j < M; ++j) {
-      Hff[j].setZero();
-      Hfy[j].setZero();
-      bf[j].setZero();
-      for (const Obs& o : *used[static_cast<size_t>(j)]) {
-        const double t = times[static_cast<size_t>(o.frame)] - times.front();
-        const Preintegrated& P = pre[static_cast<size_t>(o.frame)];
-        const Mat3 R_ck = R_c_b * P.R.transpose();
-        // Rows scaled by 1 / depth (from the first pass) are errors in normalized coordinates.
-        double w = 1.0;
-        if (pass > 0) {
-          const double z = cameraPoint(o.frame, p_f[j], y).z();
-          w = 1.0 / std::max(z, 0.05);
+  // The alignment with the frames shifted by dt on the IMU clock; returns the reprojection error
+  // sum [px^2], or infinity when it has no solution or puts a feature behind the camera.
+  auto solve = [&](double dt) {
+    times = stamps;
+    for (auto& t : times) t += dt;
+    pre = preintegrate(imu_, times);
+    for (int pass = 0; pass < 2; ++pass) {
+      Mat6 Hyy = Mat6::Zero();
+      Vec6 by = Vec6::Zero();
+      for (int j = 0; j < M; ++j) {
+        Hff[j].setZero();
+        Hfy[j].setZero();
+        bf[j].setZero();
+        for (const Obs& o : *used[static_cast<size_t>(j)]) {
+          const double t = times[static_cast<size_t>(o.frame)] - times.front();
+          const Preintegrated& P = pre[static_cast<size_t>(o.frame)];
+          const Mat3 R_ck = R_c_b * P.R.transpose();
+          // Rows scaled by 1 / depth (from the first pass) are errors in normalized coordinates.
+          double w = 1.0;
+          if (pass > 0) {
+            const double z = cameraPoint(o.frame, p_f[j], y).z();
+            w = 1.0 / std::max(z, 0.05);
+          }
+          Eigen::Matrix<double, 2, 3> E;
+          E << 1.0, 0.0, -o.xn.x(), 0.0, 1.0, -o.xn.y();
+          const Eigen::Matrix<double, 2, 3> Af = w * E * R_ck;
+          Eigen::Matrix<double, 2, 6> Ay;
+          Ay << -t * Af, -0.5 * t * t * Af;
+          const Eigen::Vector2d b = w * E * (R_ck * P.alpha - p_c_b);
+          Hff[j] += Af.transpose() * Af;
+          Hfy[j] += Af.transpose() * Ay;
+          bf[j] += Af.transpose() * b;
+          Hyy += Ay.transpose() * Ay;
+          by += Ay.transpose() * b;
         }
-        Eigen::Matrix<double, 2, 3> E;
-        E << 1.0, 0.0, -o.xn.x(), 0.0, 1.0, -o.xn.y();
-        const Eigen::Matrix<double, 2, 3> Af = w * E * R_ck;
-        Eigen::Matrix<double, 2, 6> Ay;
-        Ay << -t * Af, -0.5 * t * t * Af;
-        const Eigen::Vector2d b = w * E * (R_ck * P.alpha - p_c_b);
-        Hff[j] += Af.transpose() * Af;
-        Hfy[j] += Af.transpose() * Ay;
-        bf[j] += Af.transpose() * b;
-        Hyy += Ay.transpose() * Ay;
-        by += Ay.transpose() * b;
+      }
+      S = Hyy;
+      Vec6 s = by;
+      Hff_inv.assign(M, Mat3::Zero());
+      for (int j = 0; j < M; ++j) {
+        Hff_inv[j] = (Hff[j] + 1e-12 * Mat3::Identity()).inverse();
+        S -= Hfy[j].transpose() * Hff_inv[j] * Hfy[j];
+        s -= Hfy[j].transpose() * Hff_inv[j] * bf[j];
+      }
+      // |g| = G: v0 eliminated, then (S_g + lambda I) g = s_g with lambda such that |g| = G.
+      const Mat3 Svv = S.topLeftCorner<3, 3>(), Svg = S.topRightCorner<3, 3>(), Sgg = S.bottomRightCorner<3, 3>();
+      const Mat3 Svv_inv = (Svv + 1e-12 * Mat3::Identity()).inverse();
+      const Mat3 Sg = Sgg - Svg.transpose() * Svv_inv * Svg;
+      const Vec3 sg = s.tail<3>() - Svg.transpose() * Svv_inv * s.head<3>();
+      const Eigen::SelfAdjointEigenSolver<Mat3> es(0.5 * (Sg + Sg.transpose()));
+      const Vec3 d = es.eigenvalues(), c = es.eigenvectors().transpose() * sg;
+      auto norm2 = [&](double lambda) {
+        double n = 0.0;
+        for (int i = 0; i < 3; ++i) n += c(i) * c(i) / ((d(i) + lambda) * (d(i) + lambda));
+        return n;
+      };
+      double lo = -d.minCoeff() + 1e-12 * (1.0 + std::abs(d.minCoeff()));
+      double hi = -d.minCoeff() + c.norm() / G + 1.0;
+      if (!(norm2(lo) > G * G)) lo = -d.minCoeff();  // degenerate: the bisection ends at the lower end
+      for (int it = 0; it < 200; ++it) {
+        const double mid = 0.5 * (lo + hi);
+        (norm2(mid) > G * G ? lo : hi) = mid;
+      }
+      const double lambda = 0.5 * (lo + hi);
+      Vec3 g = Vec3::Zero();
+      for (int i = 0; i < 3; ++i) g += es.eigenvectors().col(i) * c(i) / (d(i) + lambda);
+      if (!(g.norm() > 0.5 * G)) return std::numeric_limits<double>::infinity();
+      g *= G / g.norm();
+      y.head<3>() = Svv_inv * (s.head<3>() - Svg * g);
+      y.tail<3>() = g;
+      for (int j = 0; j < M; ++j) p_f[j] = Hff_inv[j] * (bf[j] - Hfy[j] * y);
+      if (!y.allFinite()) return std::numeric_limits<double>::infinity();
+    }
+    double chi2 = 0.0;
+    for (int j = 0; j < M; ++j) {
+      for (const Obs& o : *used[static_cast<size_t>(j)]) {
+        const Vec3 pc = cameraPoint(o.frame, p_f[j], y);
+        if (!(pc.z() > 0.05)) return std::numeric_limits<double>::infinity();
+        chi2 += ((pc.head<2>() / pc.z() - o.xn) * f_px).squaredNorm();
       }
     }
-    S = Hyy;
-    Vec6 s = by;
-    std::vector<Mat3> Hff_inv(M);
-    for (int j = 0; j < M; ++j) {
-      Hff_inv[j] = (Hff[j] + 1e-12 * Mat3::Identity()).inverse();
-      S -= Hfy[j].transpose() * Hff_inv[j] * Hfy[j];
-      s -= Hfy[j].transpose() * Hff_inv[j] * bf[j];
+    return chi2;
+  };
+  // The camera-IMU time offset is part of the alignment: the best of a grid over
+  // +-time_offset_search_s (5 ms steps), refined by a golden-section search between its neighbours.
+  double best_dt = 0.0, dt_curvature = 0.0;  // d^2 chi2 / d dt^2 at the best [px^2/s^2]
+  if (search > 0.0) {
+    constexpr double kStep = 0.005;
+    const int n = static_cast<int>(std::floor(search / kStep));
+    std::vector<double> cost(static_cast<size_t>(2 * n + 1));
+    for (int i = 0; i <= 2 * n; ++i) cost[static_cast<size_t>(i)] = solve((i - n) * kStep);
+    const int best = static_cast<int>(std::min_element(cost.begin(), cost.end()) - cost.begin());
+    best_dt = (best - n) * kStep;
+    if (best > 0 && best < 2 * n) {
+      const double a = cost[static_cast<size_t>(best - 1)], b = cost[static_cast<size_t>(best)],
+                   c2 = cost[static_cast<size_t>(best + 1)];
+      const double den = a - 2.0 * b + c2;
+      if (std::isfinite(den) && den > 0.0) dt_curvature = den / (kStep * kStep);
+      const double phi = 0.5 * (std::sqrt(5.0) - 1.0);
+      double lo = best_dt - kStep, hi = best_dt + kStep;
+      double x1 = hi - phi * (hi - lo), x2 = lo + phi * (hi - lo);
+      double f1 = solve(x1), f2 = solve(x2);
+      for (int it = 0; it < 12; ++it) {  // the bracket shrinks to 0.3% of 10 ms
+        if (f1 < f2) {
+          hi = x2;
+          x2 = x1;
+          f2 = f1;
+          x1 = hi - phi * (hi - lo);
+          f1 = solve(x1);
+        } else {
+          lo = x1;
+          x1 = x2;
+          f1 = f2;
+          x2 = lo + phi * (hi - lo);
+          f2 = solve(x2);
+        }
+      }
+      best_dt = f1 < f2 ? x1 : x2;
     }
-    // |g| = G: v0 eliminated, then (S_g + lambda I) g = s_g with lambda such that |g| = G.
-    const Mat3 Svv = S.topLeftCorner<3, 3>(), Svg = S.topRightCorner<3, 3>(), Sgg = S.bottomRightCorner<3, 3>();
-    const Mat3 Svv_inv = (Svv + 1e-12 * Mat3::Identity()).inverse();
-    const Mat3 Sg = Sgg - Svg.transpose() * Svv_inv * Svg;
-    const Vec3 sg = s.tail<3>() - Svg.transpose() * Svv_inv * s.head<3>();
-    const Eigen::SelfAdjointEigenSolver<Mat3> es(0.5 * (Sg + Sg.transpose()));
-    const Vec3 d = es.eigenvalues(), c = es.eigenvectors().transpose() * sg;
-    auto norm2 = [&](double lambda) {
-      double n = 0.0;
-      for (int i = 0; i < 3; ++i) n += c(i) * c(i) / ((d(i) + lambda) * (d(i) + lambda));
-      return n;
-    };
-    double lo = -d.minCoeff() + 1e-12 * (1.0 + std::abs(d.minCoeff()));
-    double hi = -d.minCoeff() + c.norm() / G + 1.0;
-    if (!(norm2(lo) > G * G)) lo = -d.minCoeff();  // degenerate: the bisection ends at the lower end
-    for (int it = 0; it < 200; ++it) {
-      const double mid = 0.5 * (lo + hi);
-      (norm2(mid) > G * G ? lo : hi) = mid;
-    }
-    const double lambda = 0.5 * (lo + hi);
-    Vec3 g = Vec3::Zero();
-    for (int i = 0; i < 3; ++i) g += es.eigenvectors().col(i) * c(i) / (d(i) + lambda);
-    if (!(g.norm() > 0.5 * G)) return fail("degenerate motion: gravity not observable in the window");
-    g *= G / g.norm();
-    y.head<3>() = Svv_inv * (s.head<3>() - Svg * g);
-    y.tail<3>() = g;
-    for (int j = 0; j < M; ++j) p_f[j] = Hff_inv[j] * (bf[j] - Hfy[j] * y);
-    if (!y.allFinite()) return fail("degenerate motion: the alignment has no unique solution");
+  }
+  if (!std::isfinite(solve(best_dt))) {
+    return fail("degenerate motion: the alignment has no solution with the features in front of the camera");
   }
 
-  const double f_px = 0.5 * (camera_.intrinsics().fx + camera_.intrinsics().fy);
   const double G2 = G * G;
   const double t_K = times.back() - times.front();
   // RMS kinematic acceleration over the window (with the gravity found), for the time offset's share.
@@ -259,6 +331,7 @@ std::optional<DynamicInitResult> DynamicInitializer::tryInitialize(std::string* 
     accel_rms = n > 0 ? std::sqrt(accel_rms / n) : 0.0;
   }
   // Uncertainty of v_K = v0 + g t_K + beta_K and of gravity's direction for a given pixel noise.
+  double sigma_v_ls = 0.0;  // the velocity's std-dev from the alignment alone
   auto sigmas = [&](double sigma_px, double* sigma_v, double* sigma_tilt) {
     const double sigma_n = sigma_px / f_px;
     const Mat6 cov_y = sigma_n * sigma_n * (S + 1e-12 * Mat6::Identity()).inverse();
@@ -274,8 +347,14 @@ std::optional<DynamicInitResult> DynamicInitializer::tryInitialize(std::string* 
     // attitude by up to b_g T (and gravity leaks into the velocity through it), and a camera-IMU
     // time offset t_d shifts every frame's pose by the motion over t_d (velocity error ~ a t_d).
     const double tilt_bg = params_.gyro_bias_sigma_radps * t_K;
-    const double v_td = accel_rms * params_.time_offset_sigma_s;
+    // The time offset as found (Fisher information of chi2 / sigma^2: half its curvature), not
+    // below the 5 ms grid, or as assumed when not searched.
+    double td_sigma = params_.time_offset_sigma_s;
+    if (search > 0.0)
+      td_sigma = dt_curvature > 0.0 ? std::max(0.005, sigma_px * std::sqrt(2.0 / dt_curvature)) : search;
+    const double v_td = accel_rms * td_sigma;
     *sigma_tilt = std::sqrt(var_tilt + tilt_bg * tilt_bg);
+    sigma_v_ls = std::sqrt(var_v);
     *sigma_v = std::sqrt(var_v + std::pow(0.5 * G * tilt_bg, 2) + v_td * v_td);
   };
   std::ostringstream quality;
@@ -328,12 +407,33 @@ std::optional<DynamicInitResult> DynamicInitializer::tryInitialize(std::string* 
   const Preintegrated& PK = pre.back();
   const Quat q_n_I0 = gravityAlignedAttitude(-g);
   r.state.timestamp = times.back();
+  r.time_offset_correction_s = best_dt;
   r.state.q_n_b = (q_n_I0 * Quat(PK.R)).normalized();
   r.state.v_n_b = q_n_I0 * (y.head<3>() + g * t_K + PK.beta);
   if (!last_depths.empty()) {
     std::nth_element(last_depths.begin(), last_depths.begin() + static_cast<std::ptrdiff_t>(last_depths.size() / 2),
                      last_depths.end());
     r.median_depth_m = last_depths[last_depths.size() / 2];
+  }
+  // The features of the last frame, with the depth uncertainty of the alignment (the marginal of
+  // each p_f), scaled up as the velocity's by what the alignment takes as known (a scale error).
+  const double inflate = sigma_v_ls > 0.0 ? sigma_v / sigma_v_ls : 1.0;
+  const Mat6 S_inv = (S + 1e-12 * Mat6::Identity()).inverse();
+  const double sigma_n2 = std::pow(sigma_px / f_px, 2);
+  const int last = static_cast<int>(times.size()) - 1;
+  const Mat3 R_cK = R_c_b * PK.R.transpose();
+  for (int j = 0; j < M; ++j) {
+    const std::vector<Obs>& obs = *used[static_cast<size_t>(j)];
+    if (obs.back().frame != last) continue;
+    const Vec3 pc = cameraPoint(last, p_f[j], y);
+    const Mat3 cov_f = sigma_n2 * (Hff_inv[j] + Hff_inv[j] * Hfy[j] * S_inv * Hfy[j].transpose() * Hff_inv[j]);
+    const double var_z = (R_cK * cov_f * R_cK.transpose())(2, 2);
+    DynamicInitLandmark l;
+    l.id = ids[&obs];
+    l.uv = obs.back().uv;
+    l.depth_m = pc.z();
+    l.inverse_depth_sigma = inflate * std::sqrt(std::max(0.0, var_z)) / (pc.z() * pc.z());
+    r.landmarks.push_back(l);
   }
   r.velocity_sigma_mps = sigma_v;
   r.tilt_sigma_rad = sigma_tilt;

@@ -42,7 +42,8 @@ void EkfSlam::reset() {
 
 void EkfSlam::initialize(const NavState& init) { initialize(init, config_.initial); }
 
-void EkfSlam::initialize(const NavState& init, const InitialUncertainty& u, double scene_depth_m) {
+void EkfSlam::initialize(const NavState& init, const InitialUncertainty& u, double scene_depth_m,
+                         std::optional<double> time_offset_s) {
   scene_depth_hint_m_ = scene_depth_m > 0.0 && std::isfinite(scene_depth_m) ? scene_depth_m : 0.0;
   using namespace idx;
   // Start world-centric: the initial pose uncertainty is the registration error in {n}.
@@ -53,7 +54,7 @@ void EkfSlam::initialize(const NavState& init, const InitialUncertainty& u, doub
   s.x.q_s_b = init.q_n_b.normalized();
   s.x.b_a = init.b_a;
   s.x.b_g = init.b_g;
-  s.x.t_d = config_.camera_time_offset_s;
+  s.x.t_d = time_offset_s.value_or(config_.camera_time_offset_s);
   Eigen::MatrixXd P = Eigen::MatrixXd::Zero(kWorldCentricDim, kWorldCentricDim);
   P.block<3, 3>(kP, kP).diagonal().setConstant(u.position_m * u.position_m);
   P.block<3, 3>(kV, kV).diagonal().setConstant(u.velocity_mps * u.velocity_mps);
@@ -145,6 +146,21 @@ void EkfSlam::addGapUncertainty(double dt) {
   Q.block<3, 3>(kV, kV).diagonal().setConstant(qa * dt * dt);
   Q.block<3, 3>(kPsi, kPsi).diagonal().setConstant(sg * sg * dt * dt);
   state_.propagateCovariance(MotionMatrix::Identity(m, m), Q);
+}
+
+bool EkfSlam::addLandmark(std::int64_t id, const Eigen::Vector2d& uv, double depth_m, double inverse_depth_sigma) {
+  if (!initialized_ || state_.findLandmark(id) || state_.numLandmarks() >= config_.max_landmarks) return false;
+  if (!(depth_m > 0.0) || !std::isfinite(depth_m) || !(inverse_depth_sigma > 0.0) ||
+      !std::isfinite(inverse_depth_sigma)) {
+    return false;
+  }
+  InverseDepthParams p;
+  p.initial_depth_m = depth_m;
+  p.inverse_depth_sigma = inverse_depth_sigma;
+  p.pixel_noise_px = config_.update.pixel_noise_px;
+  if (!initializeLandmarkInverseDepth(state_, {id, uv}, camera_, T_b_c_, p)) return false;
+  last_seen_[id] = state_.timestamp;
+  return true;
 }
 
 double EkfSlam::newLandmarkDepth() const {

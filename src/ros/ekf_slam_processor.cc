@@ -269,14 +269,20 @@ void EkfSlamProcessor::tryDynamicInitialize(PendingImage& img) {
     return;
   }
   if (r->state.timestamp < filter_->latestImuTime() - 1.0) return;  // the IMU no longer covers it
-  filter_->initialize(r->state, r->uncertainty(params_.filter.initial), r->median_depth_m);
+  filter_->initialize(r->state, r->uncertainty(params_.filter.initial), r->median_depth_m,
+                      params_.filter.camera_time_offset_s + r->time_offset_correction_s);
+  // The aligned features enter with the depth the alignment found (their first updates are then
+  // nearly linear); the others as any new track.
+  int added = 0;
+  for (const auto& l : r->landmarks) added += filter_->addLandmark(l.id, l.uv, l.depth_m, l.inverse_depth_sigma);
   prev_q_n_b_ = r->state.q_n_b;
   last_processed_t_ = img.t;
   std::ostringstream e;
   e.precision(3);
   e << "initialized: dynamic, " << (img.t - *first_uninitialized_image_t_) << " s after the first image (" << r->frames
-    << " images, " << r->features << " features, velocity sigma " << r->velocity_sigma_mps << " m/s, roll/pitch sigma "
-    << r->tilt_sigma_rad << " rad, median depth " << r->median_depth_m << " m)";
+    << " images, " << r->features << " features, " << added << " landmarks, median depth " << r->median_depth_m
+    << " m, velocity sigma " << r->velocity_sigma_mps << " m/s, roll/pitch sigma " << r->tilt_sigma_rad
+    << " rad, time offset " << params_.filter.camera_time_offset_s + r->time_offset_correction_s << " s)";
   ROS_INFO_STREAM("vi_ekf_slam: " << e.str());
   sink_.event(e.str());
   first_uninitialized_image_t_.reset();

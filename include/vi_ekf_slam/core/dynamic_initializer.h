@@ -32,13 +32,25 @@ struct DynamicInitParams {
   double max_tilt_sigma_rad = 0.035;     ///< refuse when roll/pitch is known worse than this [rad]
   double gyro_bias_sigma_radps = 0.01;   ///< initial std-dev of the (unknown) gyro bias [rad/s]
   double time_offset_sigma_s = 0.05;     ///< std-dev of the camera-IMU time offset it assumes [s]
-  double pixel_noise_px = 1.0;           ///< std-dev of a feature position [px]
-  double gravity_mps2 = 9.81;            ///< local gravity [m/s^2]
+  /// The frames' clock is searched for the best alignment within +- this [s] (0: taken as given).
+  double time_offset_search_s = 0.1;
+  double pixel_noise_px = 1.0;  ///< std-dev of a feature position [px]
+  double gravity_mps2 = 9.81;   ///< local gravity [m/s^2]
   std::string validate() const;
 };
 
+/// A feature of the last frame as the alignment placed it: the filter starts with it as a landmark.
+struct DynamicInitLandmark {
+  std::int64_t id = 0;
+  Eigen::Vector2d uv = Eigen::Vector2d::Zero();  ///< its pixel in the last frame
+  double depth_m = 0.0;                          ///< its depth in the last camera frame [m]
+  double inverse_depth_sigma = 0.0;              ///< std-dev of 1 / depth [1/m]
+};
+
 struct DynamicInitResult {
-  NavState state;                      ///< at the last frame of the window (p = 0, yaw = 0), on the IMU clock
+  NavState state;  ///< at the last frame of the window (p = 0, yaw = 0), on the IMU clock
+  /// What the frames' stamps were off on the IMU clock [s]: add it to the time offset they used.
+  double time_offset_correction_s = 0.0;
   double velocity_sigma_mps = 0.0;     ///< std-dev of the velocity (largest axis) [m/s]
   double tilt_sigma_rad = 0.0;         ///< std-dev of roll and pitch (largest) [rad]
   double gyro_bias_sigma_radps = 0.0;  ///< the gyro bias is not estimated: its prior std-dev [rad/s]
@@ -53,6 +65,7 @@ struct DynamicInitResult {
   int features = 0;              ///< features used
   double median_depth_m = 0.0;   ///< of the features in the last frame
   double residual_rms_px = 0.0;  ///< of the alignment
+  std::vector<DynamicInitLandmark> landmarks;
 };
 
 class DynamicInitializer {

@@ -3,6 +3,8 @@
 // ROS-free; the ROS node, the simulator study and the tools all drive this class.
 #pragma once
 
+#include <optional>
+
 #include <deque>
 #include <string>
 #include <unordered_map>
@@ -42,7 +44,12 @@ class EkfSlam {
   void initialize(const NavState& initial);
   /// The same with another initial uncertainty (a dynamic initialization's) and, if > 0, the
   /// depth the scene was seen at [m]: new landmarks start there until the map knows its own.
-  void initialize(const NavState& initial, const InitialUncertainty& uncertainty, double scene_depth_m = 0.0);
+  /// time_offset_s, if given, replaces camera_time_offset_s as the time offset's initial value.
+  void initialize(const NavState& initial, const InitialUncertainty& uncertainty, double scene_depth_m = 0.0,
+                  std::optional<double> time_offset_s = std::nullopt);
+  /// Adds a landmark seen at pixel uv now, at the given depth [m] with std-dev of its inverse
+  /// depth [1/m] (an initializer's). False if not initialized, known, the map is full, or bad.
+  bool addLandmark(std::int64_t id, const Eigen::Vector2d& uv, double depth_m, double inverse_depth_sigma);
   bool initialized() const { return initialized_; }
   /// Forgets state, map and IMU buffer.
   void reset();
