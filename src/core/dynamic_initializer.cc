@@ -239,7 +239,8 @@ std::optional<DynamicInitResult> DynamicInitializer::tryInitialize(std::string* 
       const Mat3 Sg = Sgg - Svg.transpose() * Svv_inv * Svg;
       const Vec3 sg = s.tail<3>() - Svg.transpose() * Svv_inv * s.head<3>();
       const Eigen::SelfAdjointEigenSolver<Mat3> es(0.5 * (Sg + Sg.transpose()));
-      const Vec3 d = es.eigenvalues(), c = es.eigenvectors().transpose() * sg;
+      const Vec3& d = es.eigenvalues();
+      const Vec3 c = es.eigenvectors().transpose() * sg;
       auto norm2 = [&](double lambda) {
         double n = 0.0;
         for (int i = 0; i < 3; ++i) n += c(i) * c(i) / ((d(i) + lambda) * (d(i) + lambda));
@@ -283,8 +284,8 @@ std::optional<DynamicInitResult> DynamicInitializer::tryInitialize(std::string* 
     const int best = static_cast<int>(std::min_element(cost.begin(), cost.end()) - cost.begin());
     best_dt = (best - n) * kStep;
     if (best > 0 && best < 2 * n) {
-      const double a = cost[static_cast<size_t>(best - 1)], b = cost[static_cast<size_t>(best)],
-                   c2 = cost[static_cast<size_t>(best + 1)];
+      const auto ib = static_cast<size_t>(best);
+      const double a = cost[ib - 1], b = cost[ib], c2 = cost[ib + 1];
       const double den = a - 2.0 * b + c2;
       if (std::isfinite(den) && den > 0.0) dt_curvature = den / (kStep * kStep);
       const double phi = 0.5 * (std::sqrt(5.0) - 1.0);

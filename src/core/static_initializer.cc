@@ -1,6 +1,7 @@
 #include "vi_ekf_slam/core/static_initializer.h"
 
 #include <cmath>
+#include <vector>
 
 namespace vi_ekf_slam {
 
@@ -27,17 +28,42 @@ std::optional<StaticInitResult> StaticInitializer::addImu(const ImuData& imu) {
 
   const double n = static_cast<double>(window_.size());
   Vec3 mean_a = Vec3::Zero(), mean_w = Vec3::Zero();
-  double mean_norm = 0.0;
   for (const auto& s : window_) {
     mean_a += s.am / n;
     mean_w += s.wm / n;
-    mean_norm += s.am.norm() / n;
   }
+  // Means over blocks of block_s (a low-pass that keeps motion and drops vibration).
+  std::vector<Vec3> block_a, block_w;
+  {
+    Vec3 sa = Vec3::Zero(), sw = Vec3::Zero();
+    int count = 0;
+    double block_start = window_.front().timestamp;
+    for (const auto& s : window_) {
+      if (s.timestamp - block_start >= params_.block_s && count > 0) {
+        block_a.push_back(sa / count);
+        block_w.push_back(sw / count);
+        sa.setZero();
+        sw.setZero();
+        count = 0;
+        block_start = s.timestamp;
+      }
+      sa += s.am;
+      sw += s.wm;
+      ++count;
+    }
+    if (count > 0) {
+      block_a.push_back(sa / count);
+      block_w.push_back(sw / count);
+    }
+  }
+  const double nb = static_cast<double>(block_a.size());
+  double mean_norm = 0.0;
+  for (const auto& a : block_a) mean_norm += a.norm() / nb;
   double var_norm = 0.0;
   Vec3 var_w = Vec3::Zero();
-  for (const auto& s : window_) {
-    var_norm += std::pow(s.am.norm() - mean_norm, 2) / n;
-    var_w += (s.wm - mean_w).cwiseAbs2() / n;
+  for (size_t i = 0; i < block_a.size(); ++i) {
+    var_norm += std::pow(block_a[i].norm() - mean_norm, 2) / nb;
+    var_w += (block_w[i] - mean_w).cwiseAbs2() / nb;
   }
   StaticInitResult r;
   r.accel_std_mps2 = std::sqrt(var_norm);

@@ -13,9 +13,12 @@
 namespace vi_ekf_slam {
 
 struct StaticInitParams {
-  double window_s = 1.0;                ///< length of the static window [s]
-  double max_accel_std_mps2 = 0.15;     ///< max std-dev of |am| inside the window [m/s^2]
-  double max_gyro_std_radps = 0.02;     ///< max std-dev of each gyro axis inside the window [rad/s]
+  double window_s = 1.0;             ///< length of the static window [s]
+  double max_accel_std_mps2 = 0.15;  ///< max std-dev of |am| inside the window [m/s^2]
+  double max_gyro_std_radps = 0.02;  ///< max std-dev of each gyro axis inside the window [rad/s]
+  /// Both std-devs are taken over the means of blocks this long [s]: vibration (a MAV's rotors, a
+  /// vehicle's engine) averages out, the motion of a hand or a walk (a few Hz) does not.
+  double block_s = 0.05;
   double gravity_mps2 = 9.81;           ///< local gravity [m/s^2]
   double max_gravity_error_mps2 = 0.5;  ///< | |mean am| - g | must stay below this [m/s^2]
 };
