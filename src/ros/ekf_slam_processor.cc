@@ -162,8 +162,14 @@ void EkfSlamProcessor::tryInitialize(double t_now) {
   prev_q_n_b_.reset();
   ROS_INFO("vi_ekf_slam: initialized from a %.1f s static interval (accel std %.3f m/s^2, gyro std %.4f rad/s)",
            params_.static_init.window_s, static_result_->accel_std_mps2, static_result_->gyro_std_radps);
-  sink_.event("initialized: static, " + std::to_string(params_.static_init.window_s) + " s at rest");
+  std::ostringstream e;
+  e << "initialized: static, " << params_.static_init.window_s << " s at rest";
+  sink_.event(e.str());
   first_uninitialized_image_t_.reset();
+  // Tracks start with the filter, as the images that reached the dynamic initializer meanwhile
+  // depend on when they arrived (a live replay and an offline run then differ).
+  if (tracker_) tracker_->reset();
+  if (dynamic_init_) dynamic_init_->reset();
 }
 
 void EkfSlamProcessor::imu(const sensor_msgs::Imu& msg) {
@@ -264,8 +270,9 @@ void EkfSlamProcessor::tryDynamicInitialize(PendingImage& img) {
   std::string why;
   const std::optional<DynamicInitResult> r = dynamic_init_->tryInitialize(&why);
   if (!r) {
-    reportProblem("waiting to initialize: at rest for " + std::to_string(params_.static_init.window_s) +
-                  " s, or moving: " + why);
+    std::ostringstream w;
+    w << "waiting to initialize: at rest for " << params_.static_init.window_s << " s, or moving: " << why;
+    reportProblem(w.str());
     return;
   }
   if (r->state.timestamp < filter_->latestImuTime() - 1.0) return;  // the IMU no longer covers it

@@ -132,7 +132,7 @@ TEST(RealHandheld, First15SecondsTrackWithTheRigFile) {
   const auto r = runSegment(0.0, 15.0, "config/dmvio_handheld.yaml");
   if (!r) GTEST_SKIP() << "no dmvio_handheld in DATA_DIR";
   expectTracked(*r, "rig file");
-  EXPECT_LT(r->sfm.position_rmse_m, 0.11);
+  EXPECT_LT(r->sfm.position_rmse_m, 0.088);
   EXPECT_NEAR(r->sink.time_offsets.back(), -0.048, 0.005);
 }
 
