@@ -275,7 +275,7 @@ TEST(FeatureTracker, WideImagesAreTrackedShrunkWithTheirOwnIntrinsics) {
   EXPECT_EQ(trackingIntrinsics(full, 1280).fx, full.fx);
   EXPECT_EQ(trackingIntrinsics(full, 0).width, 1280);
   const CameraModel cam_full(full), cam_t(t);
-  for (const Eigen::Vector3d p_c : {Eigen::Vector3d(0.31, -0.17, 2.0), Eigen::Vector3d(-0.9, 0.4, 1.5)}) {
+  for (const Eigen::Vector3d& p_c : {Eigen::Vector3d(0.31, -0.17, 2.0), Eigen::Vector3d(-0.9, 0.4, 1.5)}) {
     Eigen::Vector2d uv_full, uv_t;
     ASSERT_TRUE(cam_full.project(p_c, &uv_full));
     ASSERT_TRUE(cam_t.project(p_c, &uv_t));
