@@ -262,9 +262,7 @@ void EkfSlamProcessor::tryDynamicInitialize(PendingImage& img) {
   if (!first_uninitialized_image_t_) first_uninitialized_image_t_ = img.t;
   // The tracks it aligns are the tracks the filter goes on with: the same tracker, no gyro seed
   // (no attitude yet). Frames are on the IMU clock through the configured time offset.
-  img.mono = toTrackingResolution(img.mono, tracker_->camera().intrinsics());
-  CameraFrame frame = tracker_->track(img.t, img.mono, std::nullopt);
-  last_tracks_ = tracker_->stats().total;
+  CameraFrame frame = trackImage(img, std::nullopt);
   frame.timestamp = filter_->imuTime(img.t);
   dynamic_init_->addFrame(frame);
   std::string why;
@@ -296,6 +294,15 @@ void EkfSlamProcessor::tryDynamicInitialize(PendingImage& img) {
   static_result_.reset();
 }
 
+CameraFrame EkfSlamProcessor::trackImage(PendingImage& img, const std::optional<Eigen::Matrix3d>& R_cur_prev) {
+  const auto tic = std::chrono::steady_clock::now();
+  img.mono = toTrackingResolution(img.mono, tracker_->camera().intrinsics());
+  CameraFrame frame = tracker_->track(img.t, img.mono, R_cur_prev);
+  last_tracker_ms_ = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - tic).count();
+  last_tracks_ = tracker_->stats().total;
+  return frame;
+}
+
 void EkfSlamProcessor::processQueue() {
   while (!queue_.empty() && filter_ && filter_->initialized() &&
          filter_->imuTime(queue_.front().t) <= filter_->latestImuTime()) {
@@ -323,11 +330,7 @@ void EkfSlamProcessor::processImage(PendingImage& img) {
     const Mat3& R_b_c = extrinsics_->R_b_c;
     R_cur_prev = R_b_c.transpose() * R_b * R_b_c;
   }
-  const auto tracker_tic = std::chrono::steady_clock::now();
-  img.mono = toTrackingResolution(img.mono, tracker_->camera().intrinsics());
-  const CameraFrame frame = tracker_->track(img.t, img.mono, R_cur_prev);
-  last_tracker_ms_ = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - tracker_tic).count();
-  last_tracks_ = tracker_->stats().total;
+  const CameraFrame frame = trackImage(img, R_cur_prev);
   const FrameResult r = filter_->processFrame(frame);
   last_update_ms_ = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - tic).count();
   total_processing_ms_ += last_update_ms_;

@@ -101,6 +101,8 @@ class EkfSlamProcessor {
   void tryDynamicInitialize(PendingImage& img);
   void processQueue();
   void processImage(PendingImage& img);
+  /// Shrinks img.mono to the tracking resolution (for the tracks image too) and tracks it.
+  CameraFrame trackImage(PendingImage& img, const std::optional<Eigen::Matrix3d>& R_cur_prev);
   void output(const PendingImage& img, const CameraFrame& frame, const FrameResult& r);
   void reportProblem(const std::string& what);
 
