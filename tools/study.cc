@@ -24,6 +24,7 @@
 #include <iostream>
 #include <map>
 #include <mutex>
+#include <random>
 #include <sstream>
 #include <thread>
 
@@ -50,14 +51,19 @@ struct Options {
   double density = 1.0;     // landmarks per m^2 of wall (built-in walk)
   double per_metre = 15.0;  // landmarks per metre of path (TUM trajectories)
   double max_duration = 0;  // truncate TUM trajectories [s], 0 = whole file
-  double start_offset = 0;  // start this long after the file's first pose [s]
+  // Start this long after the file's first pose [s]; several (comma-separated): run r starts at
+  // the (r mod n)-th, so that each start is run runs / n times.
+  std::string start_offset = "0";
+  std::vector<double> start_offsets;
+  int random_starts = 0;  // > 0: that many start offsets drawn from the seed instead
   int max_landmarks = 0;    // map size bound of every configuration; 0: 300, or 100 with the preset
   std::string imu;          // recorded IMU (ASL imu0/data.csv) instead of a synthesized one
   std::string imu_noise = "datasheet";
   std::string preset;  // "" or openvins_sim
   // "truth": every run starts at the true state (the preset's default, like OpenVINS);
-  // "prior": the start error is drawn from the filter's initial covariance (default otherwise).
-  std::string start;
+  // "prior": the start error is drawn from the filter's initial covariance (default otherwise);
+  // "dynamic": the filter waits for the dynamic initializer, as the node does on a moving rig.
+  std::string init;
   // --inverse-depth M,S: prior depth 1/rho0 [m] and sigma of rho [1/m] of new inverse-depth
   // landmarks in every configuration (default: the core's).
   std::string inverse_depth;
@@ -90,14 +96,20 @@ Options parse(int argc, char** argv) {
       "threads", po::value(&o.threads)->default_value(o.threads), "worker threads")(
       "density", po::value(&o.density)->default_value(o.density), "built-in walk: landmarks per m^2 of wall")(
       "per-metre", po::value(&o.per_metre)->default_value(o.per_metre), "TUM files: landmarks per metre of path")(
-      "start-offset", po::value(&o.start_offset)->default_value(o.start_offset), "start this long into the file [s]")(
+      "start-offset", po::value(&o.start_offset)->default_value(o.start_offset),
+      "start this long into the file [s]; S1,S2,...: run r starts at the (r mod n)-th")(
+      "random-starts", po::value(&o.random_starts)->default_value(o.random_starts),
+      "N > 0: N start offsets drawn uniformly (from the seed) where a --max-duration window fits")(
       "max-duration", po::value(&o.max_duration)->default_value(o.max_duration), "window length, 0: to the end [s]")(
       "max-landmarks", po::value(&o.max_landmarks)->default_value(o.max_landmarks),
       "map bound of every configuration (0: 300, or 100 with the preset)")(
       "imu", po::value(&o.imu), "a recorded ASL IMU (imu0/data.csv) of the same recording as --trajectory")(
       "imu-noise", po::value(&o.imu_noise)->default_value(o.imu_noise), "datasheet | euroc_mav (with --imu)")(
       "preset", po::value(&o.preset), "openvins_sim: OpenVINS's simulator setup on a TUM file")(
-      "start", po::value(&o.start), "truth | prior (default: prior, truth with the preset)")(
+      "init", po::value(&o.init),
+      "truth | prior | dynamic: start at the true state, from an error drawn from the prior (default; truth with "
+      "the preset), or from the dynamic initializer (registered to the truth's position and yaw)")(
+      "start", po::value(&o.init), "the same as --init")(
       "gate", po::value(&o.gate)->default_value(o.gate), "chi^2 gate probability of every configuration (0: default)")(
       "new-landmarks", po::value(&o.new_landmarks)->default_value(o.new_landmarks),
       "wait | immediate: +zero_velocity configurations hold new tracks until the rig is seen moving, or not")(
@@ -116,11 +128,34 @@ Options parse(int argc, char** argv) {
   if (o.runs < 2) usage("--runs must be >= 2 (NEES bands need several runs)");
   if (o.threads < 1) usage("--threads must be >= 1");
   if (o.max_landmarks < 0) usage("--max-landmarks must be >= 1 (0: the default)");
-  if (o.start_offset < 0.0 || o.max_duration < 0.0) usage("--start-offset and --max-duration must be >= 0");
-  if (o.start_offset > 0.0 && !o.imu.empty()) usage("--start-offset is for synthesized IMU only");
+  {
+    std::stringstream ss(o.start_offset);
+    std::string item;
+    while (std::getline(ss, item, ',')) {
+      try {
+        size_t used = 0;
+        o.start_offsets.push_back(std::stod(item, &used));
+        if (used != item.size()) throw std::invalid_argument(item);
+      } catch (const std::exception&) {
+        usage("--start-offset needs numbers [s], comma-separated (got '" + o.start_offset + "')");
+      }
+    }
+  }
+  if (o.start_offsets.empty()) o.start_offsets.push_back(0.0);
+  if (o.random_starts < 0) usage("--random-starts must be >= 0");
+  if (o.random_starts > 0 && !(o.max_duration > 0.0)) usage("--random-starts needs --max-duration");
+  const bool offset_given = o.random_starts > 0 || o.start_offsets.size() > 1 || o.start_offsets[0] != 0.0;
+  for (double s : o.start_offsets) {
+    if (!(s >= 0.0)) usage("--start-offset must be >= 0");
+  }
+  if (o.max_duration < 0.0) usage("--max-duration must be >= 0");
+  if (offset_given && !o.imu.empty()) usage("--start-offset is for synthesized IMU only");
   if (o.imu_noise != "datasheet" && o.imu_noise != "euroc_mav") usage("--imu-noise must be datasheet or euroc_mav");
   if (o.gate != 0.0 && !(o.gate > 0.0 && o.gate < 1.0)) usage("--gate must be in (0, 1)");
-  if (!o.start.empty() && o.start != "truth" && o.start != "prior") usage("--start must be truth or prior");
+  if (!o.init.empty() && o.init != "truth" && o.init != "prior" && o.init != "dynamic") {
+    usage("--init must be truth, prior or dynamic");
+  }
+  if (o.init == "dynamic" && !o.imu.empty()) usage("--init dynamic is for synthesized IMU only");
   if (o.new_landmarks != "wait" && o.new_landmarks != "immediate") usage("--new-landmarks must be wait or immediate");
   if (!o.inverse_depth.empty() &&
       (std::sscanf(o.inverse_depth.c_str(), "%lf,%lf", &o.inverse_depth_initial_m, &o.inverse_depth_sigma) != 2 ||
@@ -247,7 +282,9 @@ void writeRunNees(const fs::path& dir, const std::vector<sim::RunResult>& runs) 
   for (const char* kind : {"pose", "p", "q"})
     for (size_t r = 0; r < runs.size(); ++r) f << "," << kind << "_" << r;
   f << "\n";
-  const size_t frames = runs.front().frames.size();
+  // Runs of a dynamic start begin at their initialization and differ in length: the frames all have.
+  size_t frames = runs.front().frames.size();
+  for (const auto& r : runs) frames = std::min(frames, r.frames.size());
   for (size_t k = 0; k < frames; ++k) {
     f << std::setprecision(15) << runs.front().frames[k].t << std::setprecision(5);
     for (const auto& r : runs) f << "," << r.frames[k].nees_pose;
@@ -261,7 +298,7 @@ void writeConfigFiles(const fs::path& dir, const sim::ConsistencySummary& s, con
                       const sim::Scenario& sc) {
   fs::create_directories(dir);
   writeRunNees(dir, runs);
-  const sim::RunResult& run0 = runs.front();
+  const sim::RunResult& run0 = runs.front();  // (a run that never initialized has no frames)
   const eval::NeesBand b3 = eval::neesBand(3, s.runs);
   std::ofstream ts(dir / "timeseries.csv");
   ts << "t,avg_nees_p,avg_nees_q,avg_nees_pose,median_gamma,rms_p,band6_lo,band6_hi,band3_lo,band3_hi";
@@ -333,16 +370,37 @@ int main(int argc, char** argv) {
     std::cerr << "error: " << e.what() << "\n";
     return 1;
   }
-  if (!o.start.empty()) sc.start_at_truth = o.start == "truth";
-  if (o.max_duration > 0.0 || o.start_offset > 0.0) {
-    const double start = sc.trajectory->startTime() + o.start_offset;
-    const double end = o.max_duration > 0.0 ? start + o.max_duration : sc.trajectory->endTime();
-    sc.trajectory = std::make_shared<sim::TruncatedTrajectory>(sc.trajectory, start, end);
+  if (!o.init.empty()) sc.start_at_truth = o.init == "truth";
+  if (o.init == "dynamic") sc.dynamic_init = DynamicInitParams();
+  // One scenario per start offset (the same world and sensors, another window of the path).
+  std::vector<double> offsets = o.start_offsets;
+  if (o.random_starts > 0) {
+    const double span = sc.trajectory->endTime() - sc.trajectory->startTime() - o.max_duration;
+    if (!(span > 0.0)) usage("--random-starts: the trajectory is shorter than --max-duration");
+    std::mt19937_64 rng(o.seed);
+    std::uniform_real_distribution<double> u(0.0, span);
+    offsets.clear();
+    for (int i = 0; i < o.random_starts; ++i) offsets.push_back(std::round(10.0 * u(rng)) / 10.0);
   }
+  std::vector<sim::Scenario> scenarios;
+  for (double offset : offsets) {
+    sim::Scenario s = sc;
+    if (o.max_duration > 0.0 || offset > 0.0) {
+      const double start = sc.trajectory->startTime() + offset;
+      if (!(start < sc.trajectory->endTime())) usage("--start-offset beyond the end of the trajectory");
+      const double end = o.max_duration > 0.0 ? std::min(start + o.max_duration, sc.trajectory->endTime())
+                                              : sc.trajectory->endTime();
+      s.trajectory = std::make_shared<sim::TruncatedTrajectory>(sc.trajectory, start, end);
+    }
+    scenarios.push_back(s);
+  }
+  sc = scenarios.front();
   const auto configs = makeConfigs(o, sc);
   const double duration = sc.trajectory->endTime() - std::max(0.0, sc.trajectory->startTime());
-  std::printf("study: %s, %.1f s, %zu landmarks in the world, %d runs x %zu configurations, %d threads\n",
-              traj_name.c_str(), duration, sc.world.size(), o.runs, configs.size(), o.threads);
+  std::ostringstream starts;
+  for (size_t i = 0; i < offsets.size(); ++i) starts << (i ? "," : "") << offsets[i];
+  std::printf("study: %s, %.1f s from %s s, %zu landmarks in the world, %d runs x %zu configurations, %d threads\n",
+              traj_name.c_str(), duration, starts.str().c_str(), sc.world.size(), o.runs, configs.size(), o.threads);
 
   // All (configuration, run) jobs on a small thread pool. Run r uses seed + r for every
   // configuration (common random numbers: the same noise for each filter).
@@ -355,7 +413,7 @@ int main(int argc, char** argv) {
     for (int j = next++; j < jobs; j = next++) {
       const size_t c = static_cast<size_t>(j / o.runs);
       const size_t r = static_cast<size_t>(j % o.runs);
-      results[c][r] = sim::runMonteCarloRun(sc, configs[c].second, o.seed * 1000003ULL + r);
+      results[c][r] = sim::runMonteCarloRun(scenarios[r % scenarios.size()], configs[c].second, o.seed * 1000003ULL + r);
       std::lock_guard<std::mutex> lock(print_mutex);
       std::fprintf(stderr, "\r  %d/%d runs done", j + 1, jobs);
     }
@@ -381,8 +439,9 @@ int main(int argc, char** argv) {
   // summary.json: each configuration name -> metrics, plus the settings used.
   std::ofstream js(out / "summary.json");
   js << "{\n  \"config\": {\"trajectory\": \"" << traj_name << "\", \"seed\": " << o.seed << ", \"runs\": " << o.runs
-     << ", \"recorded_imu\": \"" << o.imu << "\", \"start\": \"" << (sc.start_at_truth ? "truth" : "prior")
-     << "\", \"imu_noise\": \"" << o.imu_noise << "\", \"duration_s\": " << jsonNumber(duration)
+     << ", \"recorded_imu\": \"" << o.imu << "\", \"start\": \"" << (sc.dynamic_init ? "dynamic" : sc.start_at_truth ? "truth" : "prior")
+     << "\", \"imu_noise\": \"" << o.imu_noise << "\", \"start_offsets_s\": [" << starts.str()
+     << "], \"duration_s\": " << jsonNumber(duration)
      << ", \"world_landmarks\": " << sc.world.size() << ", \"imu_rate_hz\": " << sc.imu.rate_hz
      << ", \"camera_rate_hz\": " << sc.cam.rate_hz << ", \"pixel_noise_px\": " << sc.cam.pixel_noise_px
      << ", \"accel_noise_density\": " << jsonNumber(sc.imu.noise.accel_noise_density)
@@ -406,7 +465,11 @@ int main(int argc, char** argv) {
        << ", \"consistent_fraction\": " << jsonNumber(s.consistent_fraction)
        << ", \"final_scale_ratio\": " << jsonNumber(s.final_scale_ratio) << ", \"runs\": " << s.runs
        << ", \"filter_ms_mean\": " << jsonNumber(s.mean_update_ms)
-       << ", \"filter_ms_p95\": " << jsonNumber(s.p95_update_ms) << "}";
+       << ", \"filter_ms_p95\": " << jsonNumber(s.p95_update_ms)
+       << ", \"nees_pose_first_10s\": " << jsonNumber(s.nees_pose_early)
+       << ", \"runs_started\": " << s.runs_started << ", \"init_delay_s\": [";
+    for (size_t r = 0; r < s.init_delay_s.size(); ++r) js << (r ? ", " : "") << jsonNumber(s.init_delay_s[r]);
+    js << "]}";
   }
   js << "\n}\n";
 
@@ -425,6 +488,25 @@ int main(int argc, char** argv) {
        << " | " << s.consistent_fraction << " | " << std::setprecision(3) << s.final_scale_ratio << " | "
        << std::setprecision(2) << s.mean_update_ms << " (" << s.p95_update_ms << ") | " << std::setprecision(1)
        << s.real_time_factor << " |\n";
+  }
+  if (sc.dynamic_init) {
+    md << "\nDynamic initialization (`--init dynamic`): delay from the start; the table above is over the runs that "
+          "initialized, from their initialization on.\n\n"
+       << "| configuration | initialized | within 1.5 s | delay mean [s] | delay max [s] | NEES pose, first "
+       << sim::kEarlyWindowS << " s |\n|---|---|---|---|---|---|\n";
+    for (const auto& s : sums) {
+      double sum = 0.0, worst = 0.0;
+      int fast = 0;
+      for (double d : s.init_delay_s) {
+        if (!std::isfinite(d)) continue;
+        sum += d;
+        worst = std::max(worst, d);
+        fast += d <= 1.5;
+      }
+      md << "| " << s.name << " | " << s.runs << "/" << s.runs_started << " | " << fast << "/" << s.runs_started
+         << " | " << std::setprecision(2) << (s.runs ? sum / s.runs : std::nan("")) << " | " << worst << " | "
+         << s.nees_pose_early << " |\n";
+    }
   }
   std::ofstream(out / "summary.md") << md.str();
   std::cout << "\n" << md.str() << "\nwritten to " << out << "\n";

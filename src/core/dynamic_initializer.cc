@@ -22,9 +22,18 @@ std::string DynamicInitParams::validate() const {
   if (!(max_velocity_sigma_mps > 0.0)) err << "dynamic init max_velocity_sigma_mps [m/s] must be > 0\n";
   if (!(max_tilt_sigma_rad > 0.0)) err << "dynamic init max_tilt_sigma_rad [rad] must be > 0\n";
   if (!(gyro_bias_sigma_radps > 0.0)) err << "dynamic init gyro_bias_sigma_radps [rad/s] must be > 0\n";
+  if (!(accel_bias_sigma_mps2 >= 0.0)) err << "dynamic init accel_bias_sigma_mps2 [m/s^2] must be >= 0\n";
   if (!(pixel_noise_px > 0.0)) err << "dynamic init pixel_noise_px [px] must be > 0\n";
   if (!(gravity_mps2 > 9.0 && gravity_mps2 < 10.5)) err << "dynamic init gravity_mps2 must be in (9, 10.5)\n";
   return err.str();
+}
+
+DynamicInitParams withFilterSettings(DynamicInitParams p, const EkfSlamConfig& filter) {
+  p.pixel_noise_px = filter.update.pixel_noise_px;
+  p.time_offset_sigma_s = filter.initial.time_offset_s;
+  p.accel_bias_sigma_mps2 = filter.initial.accel_bias_mps2;
+  p.gravity_mps2 = filter.gravity_mps2;
+  return p;
 }
 
 DynamicInitializer::DynamicInitializer(const DynamicInitParams& params, const CameraModel& camera,
@@ -71,6 +80,8 @@ struct Preintegrated {
   Mat3 R = Mat3::Identity();
   Vec3 alpha = Vec3::Zero();
   Vec3 beta = Vec3::Zero();
+  Mat3 A = Mat3::Zero();  ///< d alpha / d b_a (exact: alpha is linear in the accelerometer bias)
+  Mat3 B = Mat3::Zero();  ///< d beta / d b_a
 };
 
 std::vector<Preintegrated> preintegrate(const std::deque<ImuData>& imu, const std::vector<double>& times) {
@@ -93,6 +104,8 @@ std::vector<Preintegrated> preintegrate(const std::deque<ImuData>& imu, const st
       const Vec3 acc = R_mid * m.am;
       cur.alpha += cur.beta * dt + 0.5 * acc * dt * dt;
       cur.beta += acc * dt;
+      cur.A += cur.B * dt - 0.5 * R_mid * dt * dt;
+      cur.B -= R_mid * dt;
       cur.R = cur.R * expSO3(dt * m.wm);
     }
     while (next < times.size() && times[next] <= b) {
@@ -170,23 +183,30 @@ std::optional<DynamicInitResult> DynamicInitializer::tryInitialize(std::string* 
   const Mat3 R_c_b = T_b_c_.R_b_c.transpose();
   const Vec3 p_c_b = -R_c_b * T_b_c_.p_b_c;  // the body origin in the camera
   const int M = static_cast<int>(used.size());
-  using Mat36 = Eigen::Matrix<double, 3, 6>;
-  using Mat6 = Eigen::Matrix<double, 6, 6>;
-  using Vec6 = Eigen::Matrix<double, 6, 1>;
-  // Normal equations, p_f eliminated feature by feature (Schur complement on y = [v0, g]).
+  // y = [v0, g, b_a]: the velocity and gravity in {I0} and the accelerometer bias (body, with
+  // its prior accel_bias_sigma_mps2: a real IMU's bias along gravity, 0.12 m/s^2 on the hand-held
+  // rig, would otherwise scale a slow walk's path by tens of percent).
+  using Mat3Y = Eigen::Matrix<double, 3, 9>;
+  using MatY = Eigen::Matrix<double, 9, 9>;
+  using VecY = Eigen::Matrix<double, 9, 1>;
+  // Normal equations, p_f eliminated feature by feature (Schur complement on y).
   std::vector<Mat3> Hff(M);
-  std::vector<Mat36> Hfy(M);
+  std::vector<Mat3Y> Hfy(M);
   std::vector<Vec3> bf(M);
   std::vector<Vec3> p_f(M, Vec3::Zero());
-  Vec6 y = Vec6::Zero();
-  Mat6 S = Mat6::Zero();
+  VecY y = VecY::Zero();
+  MatY S = MatY::Zero();
   std::vector<Mat3> Hff_inv;
   const double G = params_.gravity_mps2;
   const double f_px = 0.5 * (camera_.intrinsics().fx + camera_.intrinsics().fy);
-  auto cameraPoint = [&](int k, const Vec3& pf, const Vec6& yy) {
+  // The accelerometer bias's prior as a weight on the normal equations whose unit is the
+  // residual's times `scale` (1: normalized coordinates, f_px: pixels).
+  const double ba_sigma = std::max(1e-6, params_.accel_bias_sigma_mps2);
+  auto biasPriorWeight = [&](double scale) { return std::pow(scale * params_.pixel_noise_px / f_px / ba_sigma, 2); };
+  auto cameraPoint = [&](int k, const Vec3& pf, const VecY& yy) {
     const double t = times[static_cast<size_t>(k)] - times.front();
     const Preintegrated& P = pre[static_cast<size_t>(k)];
-    const Vec3 p_k = yy.head<3>() * t + 0.5 * yy.tail<3>() * t * t + P.alpha;
+    const Vec3 p_k = yy.head<3>() * t + 0.5 * yy.segment<3>(3) * t * t + P.alpha + P.A * yy.tail<3>();
     return Vec3(R_c_b * P.R.transpose() * (pf - p_k) + p_c_b);
   };
   // The alignment with the frames shifted by dt on the IMU clock; returns the reprojection error
@@ -196,8 +216,11 @@ std::optional<DynamicInitResult> DynamicInitializer::tryInitialize(std::string* 
     for (auto& t : times) t += dt;
     pre = preintegrate(imu_, times);
     for (int pass = 0; pass < 2; ++pass) {
-      Mat6 Hyy = Mat6::Zero();
-      Vec6 by = Vec6::Zero();
+      MatY Hyy = MatY::Zero();
+      VecY by = VecY::Zero();
+      // The bias stays 0 here (it is barely observable in the linear problem, whose bias would
+      // feed it): the refinement estimates it.
+      Hyy.bottomRightCorner<3, 3>().diagonal().setConstant(1e12);
       for (int j = 0; j < M; ++j) {
         Hff[j].setZero();
         Hfy[j].setZero();
@@ -215,8 +238,8 @@ std::optional<DynamicInitResult> DynamicInitializer::tryInitialize(std::string* 
           Eigen::Matrix<double, 2, 3> E;
           E << 1.0, 0.0, -o.xn.x(), 0.0, 1.0, -o.xn.y();
           const Eigen::Matrix<double, 2, 3> Af = w * E * R_ck;
-          Eigen::Matrix<double, 2, 6> Ay;
-          Ay << -t * Af, -0.5 * t * t * Af;
+          Eigen::Matrix<double, 2, 9> Ay;
+          Ay << -t * Af, -0.5 * t * t * Af, -Af * P.A;
           const Eigen::Vector2d b = w * E * (R_ck * P.alpha - p_c_b);
           Hff[j] += Af.transpose() * Af;
           Hfy[j] += Af.transpose() * Ay;
@@ -226,18 +249,25 @@ std::optional<DynamicInitResult> DynamicInitializer::tryInitialize(std::string* 
         }
       }
       S = Hyy;
-      Vec6 s = by;
+      VecY s = by;
       Hff_inv.assign(M, Mat3::Zero());
       for (int j = 0; j < M; ++j) {
         Hff_inv[j] = (Hff[j] + 1e-12 * Mat3::Identity()).inverse();
         S -= Hfy[j].transpose() * Hff_inv[j] * Hfy[j];
         s -= Hfy[j].transpose() * Hff_inv[j] * bf[j];
       }
-      // |g| = G: v0 eliminated, then (S_g + lambda I) g = s_g with lambda such that |g| = G.
-      const Mat3 Svv = S.topLeftCorner<3, 3>(), Svg = S.topRightCorner<3, 3>(), Sgg = S.bottomRightCorner<3, 3>();
-      const Mat3 Svv_inv = (Svv + 1e-12 * Mat3::Identity()).inverse();
-      const Mat3 Sg = Sgg - Svg.transpose() * Svv_inv * Svg;
-      const Vec3 sg = s.tail<3>() - Svg.transpose() * Svv_inv * s.head<3>();
+      // |g| = G: o = [v0, b_a] eliminated, then (S_g + lambda I) g = s_g with lambda such that |g| = G.
+      using Mat6 = Eigen::Matrix<double, 6, 6>;
+      using Mat63 = Eigen::Matrix<double, 6, 3>;
+      Mat6 Soo;
+      Soo << S.topLeftCorner<3, 3>(), S.topRightCorner<3, 3>(), S.bottomLeftCorner<3, 3>(), S.bottomRightCorner<3, 3>();
+      Mat63 Sog;
+      Sog << S.block<3, 3>(0, 3), S.block<3, 3>(6, 3);
+      Eigen::Matrix<double, 6, 1> so;
+      so << s.head<3>(), s.tail<3>();
+      const Mat6 Soo_inv = (Soo + 1e-12 * Mat6::Identity()).inverse();
+      const Mat3 Sg = S.block<3, 3>(3, 3) - Sog.transpose() * Soo_inv * Sog;
+      const Vec3 sg = s.segment<3>(3) - Sog.transpose() * Soo_inv * so;
       const Eigen::SelfAdjointEigenSolver<Mat3> es(0.5 * (Sg + Sg.transpose()));
       const Vec3& d = es.eigenvalues();
       const Vec3 c = es.eigenvectors().transpose() * sg;
@@ -258,63 +288,218 @@ std::optional<DynamicInitResult> DynamicInitializer::tryInitialize(std::string* 
       for (int i = 0; i < 3; ++i) g += es.eigenvectors().col(i) * c(i) / (d(i) + lambda);
       if (!(g.norm() > 0.5 * G)) return std::numeric_limits<double>::infinity();
       g *= G / g.norm();
-      y.head<3>() = Svv_inv * (s.head<3>() - Svg * g);
-      y.tail<3>() = g;
+      const Eigen::Matrix<double, 6, 1> yo = Soo_inv * (so - Sog * g);
+      y << yo.head<3>(), g, yo.tail<3>();
       for (int j = 0; j < M; ++j) p_f[j] = Hff_inv[j] * (bf[j] - Hfy[j] * y);
       if (!y.allFinite()) return std::numeric_limits<double>::infinity();
     }
+    // The reprojection error; a feature the linear solution puts behind the camera counts with its
+    // algebraic error over 5 cm (large, but finite: the search keeps its slope there).
     double chi2 = 0.0;
     for (int j = 0; j < M; ++j) {
       for (const Obs& o : *used[static_cast<size_t>(j)]) {
         const Vec3 pc = cameraPoint(o.frame, p_f[j], y);
-        if (!(pc.z() > 0.05)) return std::numeric_limits<double>::infinity();
-        chi2 += ((pc.head<2>() / pc.z() - o.xn) * f_px).squaredNorm();
+        chi2 += ((pc.head<2>() - o.xn * pc.z()) * f_px / std::max(pc.z(), 0.05)).squaredNorm();
       }
     }
     return chi2;
   };
-  // The camera-IMU time offset is part of the alignment: the best of a grid over
-  // +-time_offset_search_s (5 ms steps), refined by a golden-section search between its neighbours.
-  double best_dt = 0.0, dt_curvature = 0.0;  // d^2 chi2 / d dt^2 at the best [px^2/s^2]
-  if (search > 0.0) {
-    constexpr double kStep = 0.005;
-    const int n = static_cast<int>(std::floor(search / kStep));
-    std::vector<double> cost(static_cast<size_t>(2 * n + 1));
-    for (int i = 0; i <= 2 * n; ++i) cost[static_cast<size_t>(i)] = solve((i - n) * kStep);
-    const int best = static_cast<int>(std::min_element(cost.begin(), cost.end()) - cost.begin());
-    best_dt = (best - n) * kStep;
-    if (best > 0 && best < 2 * n) {
-      const auto ib = static_cast<size_t>(best);
-      const double a = cost[ib - 1], b = cost[ib], c2 = cost[ib + 1];
-      const double den = a - 2.0 * b + c2;
-      if (std::isfinite(den) && den > 0.0) dt_curvature = den / (kStep * kStep);
-      const double phi = 0.5 * (std::sqrt(5.0) - 1.0);
-      double lo = best_dt - kStep, hi = best_dt + kStep;
-      double x1 = hi - phi * (hi - lo), x2 = lo + phi * (hi - lo);
-      double f1 = solve(x1), f2 = solve(x2);
-      for (int it = 0; it < 12; ++it) {  // the bracket shrinks to 0.3% of 10 ms
-        if (f1 < f2) {
-          hi = x2;
-          x2 = x1;
-          f2 = f1;
-          x1 = hi - phi * (hi - lo);
-          f1 = solve(x1);
+  // Features the linear solution puts behind the camera (far, seen with little parallax) stay out
+  // of the refinement and the result.
+  std::vector<char> active(static_cast<size_t>(M), 1);
+  int num_active = M;
+  // The linear solution is biased: its equations multiply the noisy measurement by the unknown
+  // depth (errors in variables), which pulls the scale, hence the velocity, down (-25% on a
+  // simulated walk with 1 px noise). Levenberg-Marquardt on the reprojection error in pixels,
+  // from there, with |g| held on its sphere (a 2-dof tangent step) and a Huber loss, removes it.
+  // linearize() also leaves the normal equations in normalized units at the solution (weights 1),
+  // which the uncertainty below uses.
+  auto linearize = [&](double scale, double huber_px, MatY* Hyy, VecY* by) {
+    Hyy->setZero();
+    by->setZero();
+    Hyy->bottomRightCorner<3, 3>().diagonal().setConstant(biasPriorWeight(scale));
+    by->tail<3>() = biasPriorWeight(scale) * y.tail<3>();
+    for (int j = 0; j < M; ++j) {
+      Hff[j].setZero();
+      Hfy[j].setZero();
+      bf[j].setZero();
+      if (!active[static_cast<size_t>(j)]) continue;
+      for (const Obs& o : *used[static_cast<size_t>(j)]) {
+        const double t = times[static_cast<size_t>(o.frame)] - times.front();
+        const Mat3 R_ck = R_c_b * pre[static_cast<size_t>(o.frame)].R.transpose();
+        const Vec3 pc = cameraPoint(o.frame, p_f[j], y);
+        if (!(pc.z() > 0.05)) return false;
+        const Eigen::Vector2d e = scale * (pc.head<2>() / pc.z() - o.xn);
+        Eigen::Matrix<double, 2, 3> Jp;
+        Jp << 1.0 / pc.z(), 0.0, -pc.x() / (pc.z() * pc.z()), 0.0, 1.0 / pc.z(), -pc.y() / (pc.z() * pc.z());
+        const Eigen::Matrix<double, 2, 3> Jf = scale * Jp * R_ck;
+        Eigen::Matrix<double, 2, 9> Jy;
+        Jy << -t * Jf, -0.5 * t * t * Jf, -Jf * pre[static_cast<size_t>(o.frame)].A;
+        const double w = huber_px > 0.0 && e.norm() > huber_px ? huber_px / e.norm() : 1.0;
+        Hff[j] += w * Jf.transpose() * Jf;
+        Hfy[j] += w * Jf.transpose() * Jy;
+        bf[j] += w * Jf.transpose() * e;
+        *Hyy += w * Jy.transpose() * Jy;
+        *by += w * Jy.transpose() * e;
+      }
+    }
+    return true;
+  };
+  auto reprojectionCost = [&](const VecY& yy, const std::vector<Vec3>& pf, double huber_px) {
+    double cost = biasPriorWeight(f_px) * yy.tail<3>().squaredNorm();
+    for (int j = 0; j < M; ++j) {
+      if (!active[static_cast<size_t>(j)]) continue;
+      for (const Obs& o : *used[static_cast<size_t>(j)]) {
+        const Vec3 pc = cameraPoint(o.frame, pf[static_cast<size_t>(j)], yy);
+        if (!(pc.z() > 0.05)) return std::numeric_limits<double>::infinity();
+        const double e = ((pc.head<2>() / pc.z() - o.xn) * f_px).norm();
+        cost += e <= huber_px ? e * e : huber_px * (2.0 * e - huber_px);
+      }
+    }
+    return cost;
+  };
+  const double huber_px = 3.0 * params_.pixel_noise_px;
+  // The time offset's prior (time_offset_sigma_s around the configured offset) in the cost: with
+  // little motion the images hardly tell the offset, and a free search wanders to its bounds.
+  auto timeOffsetPrior = [&](double dt) {
+    return std::pow(params_.pixel_noise_px * dt / std::max(1e-6, params_.time_offset_sigma_s), 2);
+  };
+  // The alignment at a time shift dt, refined; returns its (Huber) reprojection cost [px^2].
+  // choose_active: the features used are those in front of the camera at this dt (costs at
+  // several dt compare on the same features: chosen once, at the grid's best).
+  auto activeObservations = [&]() {
+    int k = 0;
+    for (int j = 0; j < M; ++j) k += active[static_cast<size_t>(j)] ? static_cast<int>(used[static_cast<size_t>(j)]->size()) : 0;
+    return k;
+  };
+  auto refine = [&](double dt, bool choose_active = false) {
+    if (!std::isfinite(solve(dt))) return std::numeric_limits<double>::infinity();
+    if (choose_active) {
+      num_active = 0;
+      for (int j = 0; j < M; ++j) {
+        bool in_front = true;
+        for (const Obs& o : *used[static_cast<size_t>(j)]) {
+          in_front = in_front && cameraPoint(o.frame, p_f[j], y).z() > 0.05;
+        }
+        active[static_cast<size_t>(j)] = in_front;
+        num_active += in_front;
+      }
+    }
+    if (num_active < params_.min_features) return std::numeric_limits<double>::infinity();
+    double cost = reprojectionCost(y, p_f, huber_px), lambda = 1e-4;
+    for (int it = 0; it < 20 && std::isfinite(cost); ++it) {
+      MatY Hyy;
+      VecY by;
+      if (!linearize(f_px, huber_px, &Hyy, &by)) break;
+      // g on its sphere: steps in the plane normal to it.
+      const Vec3 u = y.segment<3>(3).normalized();
+      const Vec3 a = std::abs(u.x()) < 0.9 ? Vec3::UnitX() : Vec3::UnitY();
+      Eigen::Matrix<double, 9, 8> T = Eigen::Matrix<double, 9, 8>::Zero();
+      T.topLeftCorner<3, 3>().setIdentity();
+      T.block<3, 1>(3, 3) = u.cross(a).normalized();
+      T.block<3, 1>(3, 4) = u.cross(T.block<3, 1>(3, 3));
+      T.bottomRightCorner<3, 3>().setIdentity();
+      bool accepted = false;
+      for (int tries = 0; tries < 8 && !accepted; ++tries) {
+        MatY Sy = Hyy;
+        VecY sy = by;
+        std::vector<Mat3> Hinv(static_cast<size_t>(M));
+        for (int j = 0; j < M; ++j) {
+          if (!active[static_cast<size_t>(j)]) continue;
+          Mat3 D = Hff[j];
+          D.diagonal() *= 1.0 + lambda;
+          Hinv[static_cast<size_t>(j)] = (D + 1e-12 * Mat3::Identity()).inverse();
+          Sy -= Hfy[j].transpose() * Hinv[static_cast<size_t>(j)] * Hfy[j];
+          sy -= Hfy[j].transpose() * Hinv[static_cast<size_t>(j)] * bf[j];
+        }
+        Eigen::Matrix<double, 8, 8> S8 = T.transpose() * Sy * T;
+        S8.diagonal() *= 1.0 + lambda;
+        const Eigen::Matrix<double, 8, 1> d8 = -S8.ldlt().solve(T.transpose() * sy);
+        const VecY dy = T * d8;
+        VecY y_new = y + dy;
+        y_new.segment<3>(3) = G * y_new.segment<3>(3).normalized();
+        std::vector<Vec3> pf_new = p_f;
+        for (int j = 0; j < M; ++j) {
+          if (active[static_cast<size_t>(j)]) pf_new[static_cast<size_t>(j)] -= Hinv[static_cast<size_t>(j)] * (bf[j] + Hfy[j] * dy);
+        }
+        const double c = y_new.allFinite() ? reprojectionCost(y_new, pf_new, huber_px) : cost + 1.0;
+        if (c < cost) {
+          const double gain = (cost - c) / cost;
+          y = y_new;
+          p_f = pf_new;
+          cost = c;
+          lambda = std::max(1e-8, 0.1 * lambda);
+          accepted = true;
+          if (gain < 1e-8) it = 1000;  // converged
         } else {
-          lo = x1;
-          x1 = x2;
-          f1 = f2;
-          x2 = lo + phi * (hi - lo);
-          f2 = solve(x2);
+          lambda *= 10.0;
         }
       }
-      best_dt = f1 < f2 ? x1 : x2;
+      if (!accepted) break;
     }
+    return cost + timeOffsetPrior(dt);
+  };
+  // The camera-IMU time offset is part of the alignment: the best of the refined alignments on a
+  // 10 ms grid over +-time_offset_search_s, then a golden-section search over +-10 ms around it.
+  // (The linear solution's cost is no guide: its bias moves its best by tens of ms with 1 px noise,
+  // into a minimum the refinement cannot leave.) Grid points compare by their cost per
+  // observation, as each keeps the features in front of the camera there.
+  double best_dt = 0.0, dt_curvature = 0.0;  // d^2 cost / d dt^2 at the best [px^2/s^2]
+  if (search > 0.0) {
+    constexpr double kStep = 0.01;
+    const int n = static_cast<int>(std::floor(search / kStep));
+    double best_score = std::numeric_limits<double>::infinity();
+    for (int i = -n; i <= n; ++i) {
+      const double c = refine(i * kStep, true);
+      const double score = c / std::max(1, activeObservations());
+      if (score < best_score) {
+        best_score = score;
+        best_dt = i * kStep;
+      }
+    }
+    refine(best_dt, true);
+    const double phi = 0.5 * (std::sqrt(5.0) - 1.0);
+    double lo = std::max(-search, best_dt - kStep), hi = std::min(search, best_dt + kStep);
+    double x1 = hi - phi * (hi - lo), x2 = lo + phi * (hi - lo);
+    double f1 = refine(x1), f2 = refine(x2);
+    for (int it = 0; it < 12; ++it) {  // the bracket shrinks to 0.3% of 20 ms
+      if (f1 < f2) {
+        hi = x2;
+        x2 = x1;
+        f2 = f1;
+        x1 = hi - phi * (hi - lo);
+        f1 = refine(x1);
+      } else {
+        lo = x1;
+        x1 = x2;
+        f1 = f2;
+        x2 = lo + phi * (hi - lo);
+        f2 = refine(x2);
+      }
+    }
+    best_dt = f1 < f2 ? x1 : x2;
+    const double fb = std::min(f1, f2), fa = refine(best_dt - kStep), fc = refine(best_dt + kStep);
+    const double den = fa - 2.0 * fb + fc;
+    if (std::isfinite(den) && den > 0.0) dt_curvature = den / (kStep * kStep);
   }
-  if (!std::isfinite(solve(best_dt))) {
+  if (search <= 0.0) refine(0.0, true);
+  if (!std::isfinite(refine(best_dt))) {
     return fail("degenerate motion: the alignment has no solution with the features in front of the camera");
   }
+  {
+    MatY Hyy;
+    VecY by;
+    if (!linearize(1.0, 0.0, &Hyy, &by)) {
+      return fail("alignment puts a feature behind the camera: wrong tracks or IMU");
+    }
+    S = Hyy;
+    for (int j = 0; j < M; ++j) {
+      if (!active[static_cast<size_t>(j)]) continue;
+      Hff_inv[static_cast<size_t>(j)] = (Hff[j] + 1e-12 * Mat3::Identity()).inverse();
+      S -= Hfy[j].transpose() * Hff_inv[static_cast<size_t>(j)] * Hfy[j];
+    }
+  }
 
-  const double G2 = G * G;
   const double t_K = times.back() - times.front();
   // RMS kinematic acceleration over the window (with the gravity found), for the time offset's share.
   double accel_rms = 0.0;
@@ -326,37 +511,71 @@ std::optional<DynamicInitResult> DynamicInitializer::tryInitialize(std::string* 
       if (b <= times.front() || a >= times.back()) continue;
       const ImuData m = interpolate(imu_, 0.5 * (a + b));
       R = R * expSO3((b - a) * m.wm);
-      accel_rms += (R * m.am + y.tail<3>()).squaredNorm();
+      accel_rms += (R * (m.am - y.tail<3>()) + y.segment<3>(3)).squaredNorm();
       ++n;
     }
     accel_rms = n > 0 ? std::sqrt(accel_rms / n) : 0.0;
   }
-  // Uncertainty of v_K = v0 + g t_K + beta_K and of gravity's direction for a given pixel noise.
+  // The state the alignment gives at the last frame: attitude (gravity-aligned, yaw of {I0} kept),
+  // velocity in {n} and the accelerometer bias, as functions of y; yaw_ref removes the heading a
+  // change of g would give (the heading is not the alignment's to know).
+  const Preintegrated& PK = pre.back();
+  struct Out {
+    Quat q_n_b;
+    Vec3 v_n;
+  };
+  auto output = [&](const VecY& yy, const Quat* q_ref) {
+    const Quat q_n_I0 = gravityAlignedAttitude(-yy.segment<3>(3));
+    Out o;
+    o.q_n_b = (q_n_I0 * Quat(PK.R)).normalized();
+    o.v_n = q_n_I0 * (yy.head<3>() + yy.segment<3>(3) * t_K + PK.beta + PK.B * yy.tail<3>());
+    if (q_ref) {
+      const Mat3 D = (o.q_n_b * q_ref->conjugate()).toRotationMatrix();
+      const Quat unyaw(Eigen::AngleAxisd(-std::atan2(D(1, 0), D(0, 0)), Vec3::UnitZ()));
+      o.q_n_b = unyaw * o.q_n_b;
+      o.v_n = unyaw * o.v_n;
+    }
+    return o;
+  };
+  const Out y_out = output(y, nullptr);
+  // d [v_n, psi_n, b_a] / d y, numerically (psi_n: R_true = Exp(psi) R_est; its yaw row is zero).
+  Eigen::Matrix<double, 9, 9> J_out = Eigen::Matrix<double, 9, 9>::Zero();
+  for (int i = 0; i < 9; ++i) {
+    const double h = i < 3 ? 1e-4 : i < 6 ? 1e-4 * G : 1e-4;
+    VecY yp = y, ym = y;
+    yp(i) += h;
+    ym(i) -= h;
+    const Out op = output(yp, &y_out.q_n_b), om = output(ym, &y_out.q_n_b);
+    J_out.block<3, 1>(0, i) = (op.v_n - om.v_n) / (2.0 * h);
+    J_out.block<3, 1>(3, i) =
+        (logSO3((op.q_n_b * y_out.q_n_b.conjugate()).toRotationMatrix()) -
+         logSO3((om.q_n_b * y_out.q_n_b.conjugate()).toRotationMatrix())) / (2.0 * h);
+    J_out(5, i) = 0.0;
+  }
+  J_out.block<3, 3>(6, 6).setIdentity();
+  // The covariance of [v_n, psi_n, b_a] for a given pixel noise, and the largest std-devs of the
+  // velocity and of roll/pitch.
   double sigma_v_ls = 0.0;  // the velocity's std-dev from the alignment alone
+  Eigen::Matrix<double, 9, 9> cov_out;
   auto sigmas = [&](double sigma_px, double* sigma_v, double* sigma_tilt) {
     const double sigma_n = sigma_px / f_px;
-    const Mat6 cov_y = sigma_n * sigma_n * (S + 1e-12 * Mat6::Identity()).inverse();
-    Eigen::Matrix<double, 3, 6> J_v;
-    J_v << Mat3::Identity(), t_K * Mat3::Identity();
-    const Mat3 cov_v = J_v * cov_y * J_v.transpose();
-    const Vec3 u = y.tail<3>().normalized();
-    const Mat3 Pperp = Mat3::Identity() - u * u.transpose();
-    const Mat3 cov_tilt = Pperp * cov_y.bottomRightCorner<3, 3>() * Pperp / G2;
-    const double var_v = std::max(0.0, Eigen::SelfAdjointEigenSolver<Mat3>(cov_v).eigenvalues().maxCoeff());
-    const double var_tilt = std::max(0.0, Eigen::SelfAdjointEigenSolver<Mat3>(cov_tilt).eigenvalues().maxCoeff());
-    // What the linear problem takes as known adds to that: the gyro bias tilts the integrated
+    const MatY cov_y = sigma_n * sigma_n * (S + 1e-12 * MatY::Identity()).inverse();
+    cov_out = J_out * cov_y * J_out.transpose();
+    sigma_v_ls = std::sqrt(std::max(0.0, Eigen::SelfAdjointEigenSolver<Mat3>(cov_out.topLeftCorner<3, 3>()).eigenvalues().maxCoeff()));
+    // What the alignment takes as known adds to that: the gyro bias tilts the integrated
     // attitude by up to b_g T (and gravity leaks into the velocity through it), and a camera-IMU
     // time offset t_d shifts every frame's pose by the motion over t_d (velocity error ~ a t_d).
     const double tilt_bg = params_.gyro_bias_sigma_radps * t_K;
-    // The time offset as found (Fisher information of chi2 / sigma^2: half its curvature), not
-    // below the 5 ms grid, or as assumed when not searched.
+    // The time offset as found (Fisher information of cost / sigma^2: half its curvature), not
+    // below 1 ms, or as assumed when not searched.
     double td_sigma = params_.time_offset_sigma_s;
     if (search > 0.0)
-      td_sigma = dt_curvature > 0.0 ? std::max(0.005, sigma_px * std::sqrt(2.0 / dt_curvature)) : search;
+      td_sigma = dt_curvature > 0.0 ? std::max(0.001, sigma_px * std::sqrt(2.0 / dt_curvature)) : search;
     const double v_td = accel_rms * td_sigma;
-    *sigma_tilt = std::sqrt(var_tilt + tilt_bg * tilt_bg);
-    sigma_v_ls = std::sqrt(var_v);
-    *sigma_v = std::sqrt(var_v + std::pow(0.5 * G * tilt_bg, 2) + v_td * v_td);
+    cov_out.topLeftCorner<3, 3>().diagonal().array() += std::pow(0.5 * G * tilt_bg, 2) + v_td * v_td;
+    cov_out.block<2, 2>(3, 3).diagonal().array() += tilt_bg * tilt_bg;
+    *sigma_v = std::sqrt(std::max(0.0, Eigen::SelfAdjointEigenSolver<Mat3>(cov_out.topLeftCorner<3, 3>()).eigenvalues().maxCoeff()));
+    *sigma_tilt = std::sqrt(std::max(0.0, Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d>(cov_out.block<2, 2>(3, 3)).eigenvalues().maxCoeff()));
   };
   std::ostringstream quality;
   quality.precision(3);
@@ -382,50 +601,44 @@ std::optional<DynamicInitResult> DynamicInitializer::tryInitialize(std::string* 
   int rows = 0;
   std::vector<double> last_depths;
   for (int j = 0; j < M; ++j) {
+    if (!active[static_cast<size_t>(j)]) continue;
     for (const Obs& o : *used[static_cast<size_t>(j)]) {
       const Vec3 pc = cameraPoint(o.frame, p_f[j], y);
       if (!(pc.z() > 0.05)) return fail("alignment puts a feature behind the camera: wrong tracks or IMU");
       const Eigen::Vector2d e = (pc.head<2>() / pc.z() - o.xn) * f_px;
       sum_sq += e.squaredNorm();
       rows += 2;
-      if (o.frame + 1 == static_cast<int>(times.size())) last_depths.push_back(pc.z());
     }
   }
   DynamicInitResult r;
   r.frames = static_cast<int>(times.size());
-  r.features = M;
+  r.features = num_active;
   r.residual_rms_px = std::sqrt(sum_sq / std::max(1, rows));
   if (r.residual_rms_px > 5.0 * params_.pixel_noise_px) {
     quality << "alignment residual " << r.residual_rms_px << " px: tracks or IMU inconsistent";
     return fail(quality.str());
   }
   // The noise the residuals show, if more than the assumed pixel noise, scales the uncertainty.
-  const int dof = std::max(1, rows - (3 * M + 6));
+  const int dof = std::max(1, rows - (3 * num_active + 5));
   const double sigma_px = std::max(params_.pixel_noise_px, std::sqrt(sum_sq / dof));
   sigmas(sigma_px, &sigma_v, &sigma_tilt);
   if (!observable(sigma_v, sigma_tilt)) return fail(quality.str());
-  const Vec3 g = y.tail<3>();
-  const Preintegrated& PK = pre.back();
-  const Quat q_n_I0 = gravityAlignedAttitude(-g);
   r.state.timestamp = times.back();
   r.time_offset_correction_s = best_dt;
-  r.state.q_n_b = (q_n_I0 * Quat(PK.R)).normalized();
-  r.state.v_n_b = q_n_I0 * (y.head<3>() + g * t_K + PK.beta);
-  if (!last_depths.empty()) {
-    std::nth_element(last_depths.begin(), last_depths.begin() + static_cast<std::ptrdiff_t>(last_depths.size() / 2),
-                     last_depths.end());
-    r.median_depth_m = last_depths[last_depths.size() / 2];
-  }
+  r.state.q_n_b = y_out.q_n_b;
+  r.state.v_n_b = y_out.v_n;
+  r.state.b_a = y.tail<3>();
+  r.covariance = cov_out;
   // The features of the last frame, with the depth uncertainty of the alignment (the marginal of
   // each p_f), scaled up as the velocity's by what the alignment takes as known (a scale error).
   const double inflate = sigma_v_ls > 0.0 ? sigma_v / sigma_v_ls : 1.0;
-  const Mat6 S_inv = (S + 1e-12 * Mat6::Identity()).inverse();
+  const MatY S_inv = (S + 1e-12 * MatY::Identity()).inverse();
   const double sigma_n2 = std::pow(sigma_px / f_px, 2);
   const int last = static_cast<int>(times.size()) - 1;
   const Mat3 R_cK = R_c_b * PK.R.transpose();
   for (int j = 0; j < M; ++j) {
     const std::vector<Obs>& obs = *used[static_cast<size_t>(j)];
-    if (obs.back().frame != last) continue;
+    if (!active[static_cast<size_t>(j)] || obs.back().frame != last) continue;
     const Vec3 pc = cameraPoint(last, p_f[j], y);
     const Mat3 cov_f = sigma_n2 * (Hff_inv[j] + Hff_inv[j] * Hfy[j] * S_inv * Hfy[j].transpose() * Hff_inv[j]);
     const double var_z = (R_cK * cov_f * R_cK.transpose())(2, 2);
@@ -435,10 +648,20 @@ std::optional<DynamicInitResult> DynamicInitializer::tryInitialize(std::string* 
     l.depth_m = pc.z();
     l.inverse_depth_sigma = inflate * std::sqrt(std::max(0.0, var_z)) / (pc.z() * pc.z());
     r.landmarks.push_back(l);
+    // The scene's depth from the features whose depth the window determined (to 50%): without
+    // parallax (a rig at rest) the depths are arbitrary.
+    if (l.inverse_depth_sigma * l.depth_m < 0.5) last_depths.push_back(l.depth_m);
+  }
+  if (last_depths.size() >= 3) {
+    std::nth_element(last_depths.begin(), last_depths.begin() + static_cast<std::ptrdiff_t>(last_depths.size() / 2),
+                     last_depths.end());
+    r.median_depth_m = last_depths[last_depths.size() / 2];
   }
   r.velocity_sigma_mps = sigma_v;
   r.tilt_sigma_rad = sigma_tilt;
   r.gyro_bias_sigma_radps = params_.gyro_bias_sigma_radps;
+  r.accel_bias_sigma_mps2 =
+      std::sqrt(std::max(0.0, Eigen::SelfAdjointEigenSolver<Mat3>(cov_out.bottomRightCorner<3, 3>()).eigenvalues().maxCoeff()));
   if (why) why->clear();
   return r;
 }

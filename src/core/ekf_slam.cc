@@ -1,5 +1,7 @@
 #include "vi_ekf_slam/core/ekf_slam.h"
 
+#include <array>
+
 #include <algorithm>
 #include <cmath>
 #include <limits>
@@ -63,6 +65,23 @@ void EkfSlam::initialize(const NavState& init, const InitialUncertainty& u, doub
       u.yaw_rad * u.yaw_rad;
   P.block<3, 3>(kBg, kBg).diagonal().setConstant(u.gyro_bias_radps * u.gyro_bias_radps);
   P(kTd, kTd) = u.time_offset_s * u.time_offset_s;
+  if (u.velocity_attitude_accel_bias) {
+    // An initializer's [v, psi, b_a] with their correlations; the yaw's variance is the prior's.
+    const std::array<int, 3> at{kV, kPsi, kBa};
+    for (int i = 0; i < 3; ++i) {
+      for (int j = 0; j < 3; ++j) P.block<3, 3>(at[i], at[j]) = u.velocity_attitude_accel_bias->block<3, 3>(3 * i, 3 * j);
+    }
+    P.row(kPsi + 2).setZero();
+    P.col(kPsi + 2).setZero();
+    P(kPsi + 2, kPsi + 2) = u.yaw_rad * u.yaw_rad;
+  }
+  // An initializer that knows the velocity relative to its own heading: v_true = R_z(yaw error)
+  // (v + dv), so the velocity error gains e_z x v times the yaw error.
+  if (u.velocity_relative_to_heading) {
+    Eigen::MatrixXd J = Eigen::MatrixXd::Identity(kWorldCentricDim, kWorldCentricDim);
+    J.block<3, 1>(kV, kPsi + 2) = Vec3::UnitZ().cross(init.v_n_b);
+    P = J * P * J.transpose();
+  }
   s.setCovariance(P);
   // Sensor-centric: {s} := initial body frame; the pose in {s} is exact and the registration
   // uncertainty moves to p_n_s, q_n_s (the same frame change as a mechanization switch).
@@ -146,6 +165,27 @@ void EkfSlam::addGapUncertainty(double dt) {
   Q.block<3, 3>(kV, kV).diagonal().setConstant(qa * dt * dt);
   Q.block<3, 3>(kPsi, kPsi).diagonal().setConstant(sg * sg * dt * dt);
   state_.propagateCovariance(MotionMatrix::Identity(m, m), Q);
+}
+
+int EkfSlam::initialize(const DynamicInitResult& aligned, const NavState& registered) {
+  InitialUncertainty u = aligned.uncertainty(config_.initial);
+  // The registration turned the aligned state about {n}'s z axis: so are its v and psi.
+  const Mat3 R_z = (registered.q_n_b * aligned.state.q_n_b.conjugate()).toRotationMatrix();
+  Eigen::Matrix<double, 9, 9> T = Eigen::Matrix<double, 9, 9>::Identity();
+  T.block<3, 3>(0, 0) = R_z;
+  T.block<3, 3>(3, 3) = R_z;
+  u.velocity_attitude_accel_bias = T * aligned.covariance * T.transpose();
+  initialize(registered, u, aligned.median_depth_m, config_.camera_time_offset_s + aligned.time_offset_correction_s);
+  // The aligned features enter with the depth the alignment found (their first updates are then
+  // nearly linear) when it knows it better than a new track's prior; the others later as any new
+  // track.
+  int added = 0;
+  for (const auto& l : aligned.landmarks) {
+    if (l.inverse_depth_sigma < config_.inverse_depth_sigma) {
+      added += addLandmark(l.id, l.uv, l.depth_m, l.inverse_depth_sigma);
+    }
+  }
+  return added;
 }
 
 bool EkfSlam::addLandmark(std::int64_t id, const Eigen::Vector2d& uv, double depth_m, double inverse_depth_sigma) {

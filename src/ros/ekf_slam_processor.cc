@@ -136,10 +136,8 @@ bool EkfSlamProcessor::cameraReady(const std::string& image_frame) {
       const CameraModel camera(trackingIntrinsics(*intrinsics_, params_.tracker.max_image_width_px));
       filter_ = std::make_unique<EkfSlam>(params_.filter, camera, *extrinsics_);
       tracker_ = std::make_unique<FeatureTracker>(camera, params_.tracker);
-      DynamicInitParams dp = params_.dynamic_init;
-      dp.pixel_noise_px = params_.filter.update.pixel_noise_px;
-      dp.time_offset_sigma_s = params_.filter.initial.time_offset_s;
-      dynamic_init_ = std::make_unique<DynamicInitializer>(dp, camera, *extrinsics_);
+      dynamic_init_ = std::make_unique<DynamicInitializer>(withFilterSettings(params_.dynamic_init, params_.filter),
+                                                           camera, *extrinsics_);
     } catch (const std::exception& e) {
       reportProblem(std::string("cannot start the filter: ") + e.what());
       filter_.reset();
@@ -274,12 +272,7 @@ void EkfSlamProcessor::tryDynamicInitialize(PendingImage& img) {
     return;
   }
   if (r->state.timestamp < filter_->latestImuTime() - 1.0) return;  // the IMU no longer covers it
-  filter_->initialize(r->state, r->uncertainty(params_.filter.initial), r->median_depth_m,
-                      params_.filter.camera_time_offset_s + r->time_offset_correction_s);
-  // The aligned features enter with the depth the alignment found (their first updates are then
-  // nearly linear); the others as any new track.
-  int added = 0;
-  for (const auto& l : r->landmarks) added += filter_->addLandmark(l.id, l.uv, l.depth_m, l.inverse_depth_sigma);
+  const int added = filter_->initialize(*r, r->state);
   prev_q_n_b_ = r->state.q_n_b;
   last_processed_t_ = img.t;
   std::ostringstream e;

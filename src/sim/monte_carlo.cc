@@ -34,6 +34,11 @@ RunResult runMonteCarloRun(const Scenario& scenario_in, const EkfSlamConfig& con
   Scenario sc = scenario_in;
   sc.imu.initial_accel_bias_sigma_mps2 = config.initial.accel_bias_mps2;
   sc.imu.initial_gyro_bias_sigma_radps = config.initial.gyro_bias_radps;
+  if (sc.dynamic_init) {
+    // The initializer does not estimate the gyro bias: its prior is the one the biases are drawn with.
+    sc.dynamic_init = withFilterSettings(*sc.dynamic_init, config);
+    sc.dynamic_init->gyro_bias_sigma_radps = config.initial.gyro_bias_radps;
+  }
   std::mt19937_64 rng(seed);
   const double t0 = std::max(0.0, sc.trajectory->startTime());
   const NavState truth0 = trueNavState(*sc.trajectory, t0);
@@ -61,7 +66,14 @@ RunResult runMonteCarloRun(const Scenario& scenario_in, const EkfSlamConfig& con
   Quat q_n_s_true = truth0.q_n_b;
   std::vector<Vec3> p_true, p_est;
   std::vector<double> q_err_deg;
+  bool first_frame = true;
   const FrameCallback cb = [&](EkfSlam& f, FrameRecord& rec) {
+    if (first_frame && sc.dynamic_init) {
+      const TrajectorySample at_init = sc.trajectory->sample(rec.initialized_t);
+      p_n_s_true = at_init.p_n_b;
+      q_n_s_true = at_init.q_n_b;
+    }
+    first_frame = false;
     FrameMetrics m;
     m.update_ms = rec.filter_ms;
     m.t = rec.t;
@@ -123,7 +135,8 @@ RunResult runMonteCarloRun(const Scenario& scenario_in, const EkfSlamConfig& con
     q_err_deg.push_back(m.e_q.norm() * 180.0 / M_PI);
     out.frames.push_back(m);
   };
-  runSimulation(sc, config, init, rng, cb);
+  const SimRun run = runSimulation(sc, config, init, rng, cb, false);
+  out.init_delay_s = run.initialized_t - t0;
   std::vector<Vec3> e;
   for (size_t i = 0; i < p_true.size(); ++i) e.push_back(p_true[i] - p_est[i]);
   out.ate_position_m = eval::rms(e);
@@ -142,15 +155,22 @@ RunResult runMonteCarloRun(const Scenario& scenario_in, const EkfSlamConfig& con
   return out;
 }
 
-ConsistencySummary summarize(const std::string& name, const std::vector<RunResult>& runs) {
+ConsistencySummary summarize(const std::string& name, const std::vector<RunResult>& all_runs) {
   ConsistencySummary s;
   s.name = name;
+  s.runs_started = static_cast<int>(all_runs.size());
+  // Runs that never initialized (a dynamic start that kept waiting) have no estimate to judge;
+  // the others are compared frame by frame from their initialization on, over the frames all have.
+  std::vector<RunResult> runs;
+  for (const auto& r : all_runs) {
+    s.init_delay_s.push_back(r.init_delay_s);
+    if (std::isfinite(r.init_delay_s) && !r.frames.empty()) runs.push_back(r);
+  }
   s.runs = static_cast<int>(runs.size());
   if (runs.empty()) return s;
-  const size_t T = runs.front().frames.size();
-  for (const auto& r : runs) {
-    if (r.frames.size() != T) throw std::runtime_error("summarize: runs have different lengths");
-  }
+  size_t T = runs.front().frames.size();
+  for (const auto& r : runs) T = std::min(T, r.frames.size());
+  for (auto& r : runs) r.frames.resize(T);
   const double M = static_cast<double>(runs.size());
   s.pose_band = eval::neesBand(6, s.runs);
   int inside = 0, counted = 0;
@@ -204,6 +224,9 @@ ConsistencySummary summarize(const std::string& name, const std::vector<RunResul
   s.nees_position = mean(s.avg_nees_p);
   s.nees_orientation = mean(s.avg_nees_q);
   s.nees_pose = mean(s.avg_nees_pose);
+  std::vector<double> early;
+  for (size_t k = 0; k < T && s.t[k] - s.t.front() < kEarlyWindowS; ++k) early.push_back(s.avg_nees_pose[k]);
+  s.nees_pose_early = mean(early);
   s.consistent_fraction = counted ? static_cast<double>(inside) / counted : 0.0;
   std::vector<double> ate, ateq, fin, gam, ate_py, rtf;
   for (const auto& r : runs) {

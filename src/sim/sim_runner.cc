@@ -4,6 +4,7 @@
 #include <chrono>
 #include <cmath>
 #include <deque>
+#include <optional>
 
 namespace vi_ekf_slam::sim {
 
@@ -15,6 +16,23 @@ NavState trueNavState(const Trajectory& trajectory, double t) {
   n.v_n_b = s.v_n_b;
   n.q_n_b = s.q_n_b;
   return n;
+}
+
+NavState registerToTruth(const NavState& aligned, const NavState& truth, const InitialUncertainty& u,
+                         std::mt19937_64& rng) {
+  std::normal_distribution<double> n(0.0, 1.0);
+  auto yawOf = [](const Quat& q) {
+    const Mat3 R = q.toRotationMatrix();
+    return std::atan2(R(1, 0), R(0, 0));
+  };
+  const double yaw_error = u.yaw_rad * n(rng);
+  const Quat R_z(Eigen::AngleAxisd(yawOf(truth.q_n_b) - yawOf(aligned.q_n_b) - yaw_error, Vec3::UnitZ()));
+  NavState r = aligned;
+  r.q_n_b = (R_z * aligned.q_n_b).normalized();
+  r.v_n_b = R_z * aligned.v_n_b;
+  const double x = n(rng), y = n(rng), z = n(rng);
+  r.p_n_b = truth.p_n_b - u.position_m * Vec3(x, y, z);
+  return r;
 }
 
 std::string toString(SensorFault::Kind kind) {
@@ -60,8 +78,24 @@ SimRun runSimulation(const Scenario& sc, const EkfSlamConfig& config, const NavS
   const ImuSequence& imu = sc.recorded_imu ? *sc.recorded_imu : simulated;
   EkfSlam filter(config, sc.camera, sc.T_b_c);
   TrackingCamera camera(sc.world, sc.camera, sc.T_b_c, sc.cam);
-  filter.initialize(initial);
   SimRun run;
+  std::optional<DynamicInitializer> dynamic;
+  if (sc.dynamic_init) {
+    dynamic.emplace(*sc.dynamic_init, sc.camera, sc.T_b_c);
+  } else {
+    filter.initialize(initial);
+    run.initialized_t = initial.timestamp;
+  }
+  // Until the dynamic initializer succeeds, frames go to it (on the IMU clock through the
+  // configured time offset), as in the node; the frames it has seen are not replayed.
+  auto tryDynamicInitialization = [&](CameraFrame frame) {
+    frame.timestamp = filter.imuTime(frame.timestamp);
+    dynamic->addFrame(frame);
+    const std::optional<DynamicInitResult> r = dynamic->tryInitialize(nullptr);
+    if (!r) return;
+    filter.initialize(*r, registerToTruth(r->state, trueNavState(traj, r->state.timestamp), config.initial, rng));
+    run.initialized_t = r->state.timestamp;
+  };
   const double cam_dt = 1.0 / sc.cam.rate_hz;
   int next_frame = 1;  // the first frame comes one camera period after the start
   auto frameTime = [&](int k) { return initial.timestamp + k * cam_dt; };
@@ -86,11 +120,15 @@ SimRun runSimulation(const Scenario& sc, const EkfSlamConfig& config, const NavS
     rec.true_gyro_bias = imu.true_gyro_bias[bias_index];
     rec.estimate = filter.navState();
     rec.landmarks_in_state = filter.state().numLandmarks();
+    rec.initialized_t = run.initialized_t;
     if (callback) callback(filter, rec);
     if (keep_frames) run.frames.push_back(std::move(rec));
   };
   for (size_t k = 0; k < imu.samples.size(); ++k) {
-    if (!activeFault(sc.faults, SensorFault::Kind::kImuGap, imu.samples[k].timestamp)) filter.addImu(imu.samples[k]);
+    if (!activeFault(sc.faults, SensorFault::Kind::kImuGap, imu.samples[k].timestamp)) {
+      filter.addImu(imu.samples[k]);
+      if (!filter.initialized()) dynamic->addImu(imu.samples[k]);
+    }
     while (frameTime(next_frame) <= imu.samples[k].timestamp + 1e-12 && frameTime(next_frame) <= last_frame_time) {
       const double t = frameTime(next_frame++);
       CameraFrame frame = camera.observe(traj.sample(t), &rng);
@@ -100,7 +138,11 @@ SimRun runSimulation(const Scenario& sc, const EkfSlamConfig& config, const NavS
       if (const SensorFault* f = activeFault(sc.faults, SensorFault::Kind::kOutlierBurst, t)) {
         corruptFeatures(frame, f->outlier_fraction, rng);
       }
-      pending.push_back(std::move(frame));
+      if (filter.initialized()) {
+        pending.push_back(std::move(frame));
+      } else {
+        tryDynamicInitialization(std::move(frame));
+      }
     }
     while (!pending.empty() && filter.imuTime(pending.front().timestamp) <= filter.latestImuTime() + 1e-12) {
       processPending(std::min(k, imu.true_accel_bias.size() - 1));

@@ -209,3 +209,39 @@ TEST(EkfSlam, NewTracksEnterAtOnceWhenTheFilterKnowsTheRigIsWalking) {
   EXPECT_EQ(firstFrame(1.0), std::make_pair(10, 0));
   EXPECT_EQ(firstFrame(0.0), std::make_pair(0, 10));
 }
+
+// A dynamic initialization knows the velocity relative to its own heading, and its tilt and
+// accelerometer bias together: the initial covariance carries its [v, psi, b_a] block (yaw from
+// the prior) and the v x yaw correlation (else vision would "observe" the yaw from the velocity).
+TEST(EkfSlam, AnInitializerThatKnowsItsHeadingOnlyCorrelatesVelocityAndYaw) {
+  EkfSlamConfig cfg;
+  cfg.mechanization = Mechanization::kWorldCentric;
+  EkfSlam f(cfg, sim::paperCamera(), sim::torsoCameraExtrinsics());
+  NavState init;
+  init.v_n_b = Vec3(1.2, 0.3, 0.0);
+  init.q_n_b = Quat(Eigen::AngleAxisd(0.4, Vec3::UnitZ()));
+  InitialUncertainty u = cfg.initial;
+  u.velocity_relative_to_heading = true;
+  Eigen::Matrix<double, 9, 9> C = Eigen::Matrix<double, 9, 9>::Identity() * 1e-4;
+  C(3, 7) = C(7, 3) = 5e-5;  // roll with the bias's y: what a dynamic initializer reports
+  C(5, 5) = 1e-6;            // (a yaw it does not know: replaced by the prior's)
+  u.velocity_attitude_accel_bias = C;
+  f.initialize(init, u);
+  const Eigen::MatrixXd& P = f.state().covariance();
+  using namespace idx;
+  const double s_yaw2 = u.yaw_rad * u.yaw_rad;
+  EXPECT_NEAR(P(kPsi + 2, kPsi + 2), s_yaw2, 1e-15);
+  EXPECT_NEAR(P(kPsi, kBa + 1), 5e-5, 1e-15);
+  const Vec3 dv_dyaw = Vec3::UnitZ().cross(init.v_n_b);
+  const Vec3 P_v_yaw = P.block<3, 1>(kV, kPsi + 2);
+  EXPECT_LT((P_v_yaw - s_yaw2 * dv_dyaw).norm(), 1e-12);
+  const Mat3 P_vv = P.block<3, 3>(kV, kV);
+  EXPECT_LT((P_vv - (1e-4 * Mat3::Identity() + s_yaw2 * dv_dyaw * dv_dyaw.transpose())).norm(), 1e-12);
+  // Without them: independent, as a static start or a prior says.
+  EkfSlam g0(cfg, sim::paperCamera(), sim::torsoCameraExtrinsics());
+  g0.initialize(init, cfg.initial);
+  const Eigen::MatrixXd& P0 = g0.state().covariance();
+  const double c_v_yaw = P0.block<3, 1>(kV, kPsi + 2).norm(), c_psi_ba = P0.block<3, 3>(kPsi, kBa).norm();
+  EXPECT_EQ(c_v_yaw, 0.0);
+  EXPECT_EQ(c_psi_ba, 0.0);
+}

@@ -1,14 +1,19 @@
 // Initialization while moving (visual-inertial alignment): from a short window of IMU samples
-// and feature tracks, a linear least-squares problem in the first body frame {I0} gives the
-// velocity, the gravity vector and every feature's position at once (closed form, as OpenVINS's
-// dynamic initializer and Martinelli's closed-form solution): with the attitude from the gyro and
-// the IMU's position increments alpha_k, the camera at frame k sees feature f at
-//   p_c = R_c_k (p_f - v_0 t_k - g t_k^2 / 2 - alpha_k) - R_b_c^T p_b_c,
-// and each normalized observation (x, y) gives two equations linear in (p_f, v_0, g):
-//   p_c.x - x p_c.z = 0,  p_c.y - y p_c.z = 0.
-// |g| is then imposed (a Lagrange multiplier on the reduced 3x3 problem). The covariance of the
-// solution gives the initial uncertainty of velocity and roll/pitch; when it is too large (the rig
-// rotates in place, moves at constant velocity, or sees too little parallax) it waits and says why.
+// and feature tracks, the velocity, the gravity vector, the accelerometer bias and every
+// feature's position in the first body frame {I0} (as OpenVINS's dynamic initializer and
+// Martinelli's closed-form solution). With the attitude from the gyro and the IMU's position
+// increments alpha_k (A_k = d alpha_k / d b_a), the camera at frame k sees feature f at
+//   p_c = R_c_k (p_f - v_0 t_k - g t_k^2 / 2 - alpha_k - A_k b_a) - R_b_c^T p_b_c.
+// 1. Linear: each normalized observation (x, y) gives two equations linear in (p_f, v_0, g)
+//    (b_a = 0): p_c.x - x p_c.z = 0, p_c.y - y p_c.z = 0; |g| imposed by a Lagrange multiplier.
+// 2. Refined: Levenberg-Marquardt on the reprojection error (Huber), with b_a under its prior and
+//    |g| on its sphere: the linear solution is biased (errors in variables).
+// 3. The camera-IMU time offset: the best refined alignment over a grid, then golden section,
+//    under the offset's prior.
+// The covariance of the solution (features eliminated) gives the initial uncertainty of velocity,
+// roll/pitch and accelerometer bias with their correlations; when the velocity or the tilt is
+// known too poorly (the rig rotates in place, moves at constant velocity, or sees too little
+// parallax) it waits and says why.
 #pragma once
 
 #include <deque>
@@ -31,6 +36,8 @@ struct DynamicInitParams {
   double max_velocity_sigma_mps = 0.15;  ///< refuse when the velocity is known worse than this [m/s]
   double max_tilt_sigma_rad = 0.035;     ///< refuse when roll/pitch is known worse than this [rad]
   double gyro_bias_sigma_radps = 0.01;   ///< initial std-dev of the (unknown) gyro bias [rad/s]
+  /// std-dev of the (unknown) accelerometer bias [m/s^2]; set from the filter's prior
+  double accel_bias_sigma_mps2 = 0.05;
   double time_offset_sigma_s = 0.05;     ///< std-dev of the camera-IMU time offset it assumes [s]
   /// The frames' clock is searched for the best alignment within +- this [s] (0: taken as given).
   double time_offset_search_s = 0.1;
@@ -38,6 +45,10 @@ struct DynamicInitParams {
   double gravity_mps2 = 9.81;   ///< local gravity [m/s^2]
   std::string validate() const;
 };
+
+/// `p` told what the filter's configuration already says: pixel noise, the priors of the time
+/// offset and of the accelerometer bias, and gravity (one source for each).
+DynamicInitParams withFilterSettings(DynamicInitParams p, const EkfSlamConfig& filter);
 
 /// A feature of the last frame as the alignment placed it: the filter starts with it as a landmark.
 struct DynamicInitLandmark {
@@ -54,11 +65,20 @@ struct DynamicInitResult {
   double velocity_sigma_mps = 0.0;     ///< std-dev of the velocity (largest axis) [m/s]
   double tilt_sigma_rad = 0.0;         ///< std-dev of roll and pitch (largest) [rad]
   double gyro_bias_sigma_radps = 0.0;  ///< the gyro bias is not estimated: its prior std-dev [rad/s]
-  /// `base` with the velocity, roll/pitch and gyro-bias uncertainty of this result.
+  double accel_bias_sigma_mps2 = 0.0;  ///< std-dev of the accelerometer bias (largest axis) [m/s^2]
+  /// Covariance of [v_n_b (3), psi (3, R_true = Exp(psi) R_est in {n}; yaw row and column zero:
+  /// the heading is not known), b_a (3)], with their correlations (a tilt and a bias across
+  /// gravity explain the same specific force).
+  Eigen::Matrix<double, 9, 9> covariance = Eigen::Matrix<double, 9, 9>::Zero();
+  /// `base` with this result's uncertainty: the covariance above and the gyro bias's prior; the
+  /// position, yaw and time offset keep base's.
   InitialUncertainty uncertainty(InitialUncertainty base) const {
     base.velocity_mps = velocity_sigma_mps;
     base.roll_pitch_rad = tilt_sigma_rad;
+    base.accel_bias_mps2 = accel_bias_sigma_mps2;
     base.gyro_bias_radps = gyro_bias_sigma_radps;
+    base.velocity_relative_to_heading = true;
+    base.velocity_attitude_accel_bias = covariance;
     return base;
   }
   int frames = 0;                ///< frames used

@@ -11,6 +11,7 @@
 #include <vector>
 
 #include "vi_ekf_slam/core/camera_model.h"
+#include "vi_ekf_slam/core/dynamic_initializer.h"
 #include "vi_ekf_slam/core/ekf_slam_config.h"
 #include "vi_ekf_slam/core/navigation_output.h"
 #include "vi_ekf_slam/core/types.h"
@@ -47,6 +48,10 @@ class EkfSlam {
   /// time_offset_s, if given, replaces camera_time_offset_s as the time offset's initial value.
   void initialize(const NavState& initial, const InitialUncertainty& uncertainty, double scene_depth_m = 0.0,
                   std::optional<double> time_offset_s = std::nullopt);
+  /// Starts from a dynamic initialization: its state (or `registered`, the same moved to a known
+  /// position and yaw), its uncertainty over config().initial, its time offset, and the features
+  /// it aligned as landmarks at their depth. Returns the number of landmarks added.
+  int initialize(const DynamicInitResult& aligned, const NavState& registered);
   /// Adds a landmark seen at pixel uv now, at the given depth [m] with std-dev of its inverse
   /// depth [1/m] (an initializer's). False if not initialized, known, the map is full, or bad.
   bool addLandmark(std::int64_t id, const Eigen::Vector2d& uv, double depth_m, double inverse_depth_sigma);

@@ -42,6 +42,13 @@ struct InitialUncertainty {
   /// Camera-IMU time offset [s]; 0 keeps camera_time_offset_s fixed. A rig whose camera and
   /// IMU share no hardware clock is off by tens of ms (the hand-held RealSense: 47 ms).
   double time_offset_s = 0.05;
+  /// The velocity is known relative to the heading (a dynamic initialization's, whose yaw is
+  /// arbitrary): its error in {n} then includes the yaw error's rotation of it, v x yaw_rad.
+  /// Without that correlation vision would "observe" the yaw from the velocity.
+  bool velocity_relative_to_heading = false;
+  /// If given, the covariance of [v_n_b (3), psi (3), b_a (3)] that replaces the diagonal ones
+  /// above (an initializer's, with its correlations); the yaw's variance stays yaw_rad^2.
+  std::optional<Eigen::Matrix<double, 9, 9>> velocity_attitude_accel_bias;
 };
 
 /// Defaults are the most consistent configuration of the study (README): sensor-centric with

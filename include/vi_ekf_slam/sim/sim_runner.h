@@ -3,12 +3,15 @@
 // truth at every camera time.
 #pragma once
 
+#include <cmath>
 #include <functional>
 #include <memory>
+#include <optional>
 #include <random>
 #include <string>
 #include <vector>
 
+#include "vi_ekf_slam/core/dynamic_initializer.h"
 #include "vi_ekf_slam/core/ekf_slam.h"
 #include "vi_ekf_slam/sim/camera_simulator.h"
 #include "vi_ekf_slam/sim/imu_simulator.h"
@@ -50,6 +53,11 @@ struct Scenario {
   bool start_at_truth = false;
   /// Faults injected while running (none by default).
   std::vector<SensorFault> faults;
+  /// Start as the node does when the rig moves: the filter waits for the dynamic initializer
+  /// (core/dynamic_initializer.h) on the frames and IMU from the start on, instead of starting
+  /// from `initial`. Its estimate is registered to the truth's position and yaw (what it cannot
+  /// know) with an error drawn from the filter's prior, as a prior start is.
+  std::optional<DynamicInitParams> dynamic_init;
 };
 
 /// One camera time of a run.
@@ -62,17 +70,21 @@ struct FrameRecord {
   FrameResult result;
   int landmarks_in_state = 0;
   double filter_ms = 0.0;  ///< wall time of processFrame (propagation, update, new landmarks, composition)
+  double initialized_t = 0.0;  ///< when the filter was (last) initialized [s]
 };
 
 struct SimRun {
+  /// Frames from the initialization on (frames before a dynamic initialization are not recorded).
   std::vector<FrameRecord> frames;
+  double initialized_t = std::nan("");  ///< when the filter was initialized; NaN: never [s]
   std::vector<NavLandmark> final_landmarks;
 };
 
 /// Called after each processed frame, with the filter (for extra per-frame metrics).
 using FrameCallback = std::function<void(EkfSlam&, FrameRecord&)>;
 
-/// Runs the filter from `initial` (usually the truth plus an error drawn by the caller).
+/// Runs the filter from `initial` (usually the truth plus an error drawn by the caller), or with
+/// Scenario::dynamic_init from the dynamic initializer (`initial.timestamp` is then the start).
 /// The random generator drives sensor noise. keep_frames = false leaves SimRun::frames empty
 /// (long runs that only need the callback).
 SimRun runSimulation(const Scenario& scenario, const EkfSlamConfig& config, const NavState& initial,
@@ -80,5 +92,12 @@ SimRun runSimulation(const Scenario& scenario, const EkfSlamConfig& config, cons
 
 /// The true navigation state at time t (zero biases) for initialization.
 NavState trueNavState(const Trajectory& trajectory, double t);
+
+/// A state known up to position and yaw (a dynamic initialization's, p = 0, yaw = 0) moved into
+/// the truth's frame: the truth's position and yaw minus errors drawn with the sigmas of `u`
+/// (what a registration to the map would leave); roll, pitch, velocity in the body frame and the
+/// biases stay the estimate's.
+NavState registerToTruth(const NavState& aligned, const NavState& truth, const InitialUncertainty& u,
+                         std::mt19937_64& rng);
 
 }  // namespace vi_ekf_slam::sim
