@@ -16,7 +16,7 @@ DEVEL    := $(WS)/devel
 BIN      := $(DEVEL)/lib/vi_ekf_slam
 CATKIN   := cd $(WS) && catkin_make -j$(JOBS) -DCMAKE_BUILD_TYPE=Release -DDATA_DIR=$(DATA_DIR) -DCMAKE_EXPORT_COMPILE_COMMANDS=ON
 
-.PHONY: all deps workspace build test lint demo study suite bag screenshot bench soak realdata clean help
+.PHONY: all deps workspace build test lint demo study suite initsuite bag screenshot bench soak realdata clean help
 
 BAG ?= results/bags/hallway.bag
 RVIZ ?= 0
@@ -46,6 +46,7 @@ help:
 	@echo "make bag    - render the hallway walk into $(BAG)"
 	@echo "make demo RVIZ=1 - the demo with rviz"
 	@echo "make suite  - the study over every trajectory in windows + generated walks, one table with worst cases -> results/suite"
+	@echo "make initsuite - starts mid-walk: the dynamic initializer against a start from the truth (docs/initialization.md) -> results/init_suite"
 	@echo "make realdata - the real hand-held recording (DATA_DIR/dmvio_handheld) -> results/realdata"
 	@echo "make bench  - benchmarks (core vs map size, tracker, pipeline) -> results/bench/summary.json"
 	@echo "make soak   - 30 min endurance walk per mechanization (SOAK_MINUTES=) -> results/soak"
@@ -132,6 +133,15 @@ SUITE_CONFIGS ?=
 suite: build
 	python3 tools/suite.py --study $(BIN)/vi_ekf_slam_study --data $(DATA_DIR) --out $(SUITE_OUT) --runs $(SUITE_RUNS) \
 	  --seed $(SEED) --threads $(JOBS) $(if $(SUITE_CONFIGS),--configs $(SUITE_CONFIGS)) $(if $(STUDY_ARGS),-- $(STUDY_ARGS))
+
+# Starting mid-walk (docs/initialization.md): on the built-in walk, the TUM corridor and EuRoC
+# V1_01, the study from 5 random start times (20 runs) with the node's default configuration,
+# from the dynamic initializer and from the truth; one table.
+#   make initsuite [SEED=1] [INIT_OUT=results/init_suite]
+INIT_OUT ?= results/init_suite
+initsuite: build
+	python3 tools/init_suite.py --study $(BIN)/vi_ekf_slam_study --data $(DATA_DIR) --out $(INIT_OUT) --seed $(SEED) \
+	  --threads $(JOBS)
 
 # The real hand-held recording (../shared/data/dmvio_handheld, docs/realdata.md): its ASL folder as
 # a rig bag (cached), then the node's processor offline for the three mechanizations with the
