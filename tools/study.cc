@@ -56,8 +56,8 @@ struct Options {
   std::string start_offset = "0";
   std::vector<double> start_offsets;
   int random_starts = 0;  // > 0: that many start offsets drawn from the seed instead
-  int max_landmarks = 0;    // map size bound of every configuration; 0: 300, or 100 with the preset
-  std::string imu;          // recorded IMU (ASL imu0/data.csv) instead of a synthesized one
+  int max_landmarks = 0;  // map size bound of every configuration; 0: 300, or 100 with the preset
+  std::string imu;        // recorded IMU (ASL imu0/data.csv) instead of a synthesized one
   std::string imu_noise = "datasheet";
   std::string preset;  // "" or openvins_sim
   // "truth": every run starts at the true state (the preset's default, like OpenVINS);
@@ -109,8 +109,8 @@ Options parse(int argc, char** argv) {
       "init", po::value(&o.init),
       "truth | prior | dynamic: start at the true state, from an error drawn from the prior (default; truth with "
       "the preset), or from the dynamic initializer (registered to the truth's position and yaw)")(
-      "start", po::value(&o.init), "the same as --init")(
-      "gate", po::value(&o.gate)->default_value(o.gate), "chi^2 gate probability of every configuration (0: default)")(
+      "start", po::value(&o.init), "the same as --init")("gate", po::value(&o.gate)->default_value(o.gate),
+                                                         "chi^2 gate probability of every configuration (0: default)")(
       "new-landmarks", po::value(&o.new_landmarks)->default_value(o.new_landmarks),
       "wait | immediate: +zero_velocity configurations hold new tracks until the rig is seen moving, or not")(
       "update-iterations", po::value(&o.update_iterations)->default_value(o.update_iterations),
@@ -388,8 +388,8 @@ int main(int argc, char** argv) {
     if (o.max_duration > 0.0 || offset > 0.0) {
       const double start = sc.trajectory->startTime() + offset;
       if (!(start < sc.trajectory->endTime())) usage("--start-offset beyond the end of the trajectory");
-      const double end = o.max_duration > 0.0 ? std::min(start + o.max_duration, sc.trajectory->endTime())
-                                              : sc.trajectory->endTime();
+      const double end =
+          o.max_duration > 0.0 ? std::min(start + o.max_duration, sc.trajectory->endTime()) : sc.trajectory->endTime();
       s.trajectory = std::make_shared<sim::TruncatedTrajectory>(sc.trajectory, start, end);
     }
     scenarios.push_back(s);
@@ -413,7 +413,8 @@ int main(int argc, char** argv) {
     for (int j = next++; j < jobs; j = next++) {
       const size_t c = static_cast<size_t>(j / o.runs);
       const size_t r = static_cast<size_t>(j % o.runs);
-      results[c][r] = sim::runMonteCarloRun(scenarios[r % scenarios.size()], configs[c].second, o.seed * 1000003ULL + r);
+      results[c][r] =
+          sim::runMonteCarloRun(scenarios[r % scenarios.size()], configs[c].second, o.seed * 1000003ULL + r);
       std::lock_guard<std::mutex> lock(print_mutex);
       std::fprintf(stderr, "\r  %d/%d runs done", j + 1, jobs);
     }
@@ -439,11 +440,14 @@ int main(int argc, char** argv) {
   // summary.json: each configuration name -> metrics, plus the settings used.
   std::ofstream js(out / "summary.json");
   js << "{\n  \"config\": {\"trajectory\": \"" << traj_name << "\", \"seed\": " << o.seed << ", \"runs\": " << o.runs
-     << ", \"recorded_imu\": \"" << o.imu << "\", \"start\": \"" << (sc.dynamic_init ? "dynamic" : sc.start_at_truth ? "truth" : "prior")
+     << ", \"recorded_imu\": \"" << o.imu << "\", \"start\": \""
+     << (sc.dynamic_init     ? "dynamic"
+         : sc.start_at_truth ? "truth"
+                             : "prior")
      << "\", \"imu_noise\": \"" << o.imu_noise << "\", \"start_offsets_s\": [" << starts.str()
-     << "], \"duration_s\": " << jsonNumber(duration)
-     << ", \"world_landmarks\": " << sc.world.size() << ", \"imu_rate_hz\": " << sc.imu.rate_hz
-     << ", \"camera_rate_hz\": " << sc.cam.rate_hz << ", \"pixel_noise_px\": " << sc.cam.pixel_noise_px
+     << "], \"duration_s\": " << jsonNumber(duration) << ", \"world_landmarks\": " << sc.world.size()
+     << ", \"imu_rate_hz\": " << sc.imu.rate_hz << ", \"camera_rate_hz\": " << sc.cam.rate_hz
+     << ", \"pixel_noise_px\": " << sc.cam.pixel_noise_px
      << ", \"accel_noise_density\": " << jsonNumber(sc.imu.noise.accel_noise_density)
      << ", \"gyro_noise_density\": " << jsonNumber(sc.imu.noise.gyro_noise_density)
      << ", \"accel_random_walk\": " << jsonNumber(sc.imu.noise.accel_random_walk)
@@ -466,8 +470,8 @@ int main(int argc, char** argv) {
        << ", \"final_scale_ratio\": " << jsonNumber(s.final_scale_ratio) << ", \"runs\": " << s.runs
        << ", \"filter_ms_mean\": " << jsonNumber(s.mean_update_ms)
        << ", \"filter_ms_p95\": " << jsonNumber(s.p95_update_ms)
-       << ", \"nees_pose_first_10s\": " << jsonNumber(s.nees_pose_early)
-       << ", \"runs_started\": " << s.runs_started << ", \"init_delay_s\": [";
+       << ", \"nees_pose_first_10s\": " << jsonNumber(s.nees_pose_early) << ", \"runs_started\": " << s.runs_started
+       << ", \"init_delay_s\": [";
     for (size_t r = 0; r < s.init_delay_s.size(); ++r) js << (r ? ", " : "") << jsonNumber(s.init_delay_s[r]);
     js << "]}";
   }

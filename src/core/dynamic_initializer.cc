@@ -369,7 +369,8 @@ std::optional<DynamicInitResult> DynamicInitializer::tryInitialize(std::string* 
   // several dt compare on the same features: chosen once, at the grid's best).
   auto activeObservations = [&]() {
     int k = 0;
-    for (int j = 0; j < M; ++j) k += active[static_cast<size_t>(j)] ? static_cast<int>(used[static_cast<size_t>(j)]->size()) : 0;
+    for (int j = 0; j < M; ++j)
+      k += active[static_cast<size_t>(j)] ? static_cast<int>(used[static_cast<size_t>(j)]->size()) : 0;
     return k;
   };
   auto refine = [&](double dt, bool choose_active = false) {
@@ -420,7 +421,8 @@ std::optional<DynamicInitResult> DynamicInitializer::tryInitialize(std::string* 
         y_new.segment<3>(3) = G * y_new.segment<3>(3).normalized();
         std::vector<Vec3> pf_new = p_f;
         for (int j = 0; j < M; ++j) {
-          if (active[static_cast<size_t>(j)]) pf_new[static_cast<size_t>(j)] -= Hinv[static_cast<size_t>(j)] * (bf[j] + Hfy[j] * dy);
+          if (active[static_cast<size_t>(j)])
+            pf_new[static_cast<size_t>(j)] -= Hinv[static_cast<size_t>(j)] * (bf[j] + Hfy[j] * dy);
         }
         const double c = y_new.allFinite() ? reprojectionCost(y_new, pf_new, huber_px) : cost + 1.0;
         if (c < cost) {
@@ -547,9 +549,9 @@ std::optional<DynamicInitResult> DynamicInitializer::tryInitialize(std::string* 
     ym(i) -= h;
     const Out op = output(yp, &y_out.q_n_b), om = output(ym, &y_out.q_n_b);
     J_out.block<3, 1>(0, i) = (op.v_n - om.v_n) / (2.0 * h);
-    J_out.block<3, 1>(3, i) =
-        (logSO3((op.q_n_b * y_out.q_n_b.conjugate()).toRotationMatrix()) -
-         logSO3((om.q_n_b * y_out.q_n_b.conjugate()).toRotationMatrix())) / (2.0 * h);
+    J_out.block<3, 1>(3, i) = (logSO3((op.q_n_b * y_out.q_n_b.conjugate()).toRotationMatrix()) -
+                               logSO3((om.q_n_b * y_out.q_n_b.conjugate()).toRotationMatrix())) /
+                              (2.0 * h);
     J_out(5, i) = 0.0;
   }
   J_out.block<3, 3>(6, 6).setIdentity();
@@ -561,7 +563,8 @@ std::optional<DynamicInitResult> DynamicInitializer::tryInitialize(std::string* 
     const double sigma_n = sigma_px / f_px;
     const MatY cov_y = sigma_n * sigma_n * (S + 1e-12 * MatY::Identity()).inverse();
     cov_out = J_out * cov_y * J_out.transpose();
-    sigma_v_ls = std::sqrt(std::max(0.0, Eigen::SelfAdjointEigenSolver<Mat3>(cov_out.topLeftCorner<3, 3>()).eigenvalues().maxCoeff()));
+    sigma_v_ls = std::sqrt(
+        std::max(0.0, Eigen::SelfAdjointEigenSolver<Mat3>(cov_out.topLeftCorner<3, 3>()).eigenvalues().maxCoeff()));
     // What the alignment takes as known adds to that: the gyro bias tilts the integrated
     // attitude by up to b_g T (and gravity leaks into the velocity through it), and a camera-IMU
     // time offset t_d shifts every frame's pose by the motion over t_d (velocity error ~ a t_d).
@@ -574,8 +577,10 @@ std::optional<DynamicInitResult> DynamicInitializer::tryInitialize(std::string* 
     const double v_td = accel_rms * td_sigma;
     cov_out.topLeftCorner<3, 3>().diagonal().array() += std::pow(0.5 * G * tilt_bg, 2) + v_td * v_td;
     cov_out.block<2, 2>(3, 3).diagonal().array() += tilt_bg * tilt_bg;
-    *sigma_v = std::sqrt(std::max(0.0, Eigen::SelfAdjointEigenSolver<Mat3>(cov_out.topLeftCorner<3, 3>()).eigenvalues().maxCoeff()));
-    *sigma_tilt = std::sqrt(std::max(0.0, Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d>(cov_out.block<2, 2>(3, 3)).eigenvalues().maxCoeff()));
+    *sigma_v = std::sqrt(
+        std::max(0.0, Eigen::SelfAdjointEigenSolver<Mat3>(cov_out.topLeftCorner<3, 3>()).eigenvalues().maxCoeff()));
+    *sigma_tilt = std::sqrt(std::max(
+        0.0, Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d>(cov_out.block<2, 2>(3, 3)).eigenvalues().maxCoeff()));
   };
   std::ostringstream quality;
   quality.precision(3);
@@ -660,8 +665,8 @@ std::optional<DynamicInitResult> DynamicInitializer::tryInitialize(std::string* 
   r.velocity_sigma_mps = sigma_v;
   r.tilt_sigma_rad = sigma_tilt;
   r.gyro_bias_sigma_radps = params_.gyro_bias_sigma_radps;
-  r.accel_bias_sigma_mps2 =
-      std::sqrt(std::max(0.0, Eigen::SelfAdjointEigenSolver<Mat3>(cov_out.bottomRightCorner<3, 3>()).eigenvalues().maxCoeff()));
+  r.accel_bias_sigma_mps2 = std::sqrt(
+      std::max(0.0, Eigen::SelfAdjointEigenSolver<Mat3>(cov_out.bottomRightCorner<3, 3>()).eigenvalues().maxCoeff()));
   if (why) why->clear();
   return r;
 }

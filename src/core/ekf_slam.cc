@@ -69,7 +69,8 @@ void EkfSlam::initialize(const NavState& init, const InitialUncertainty& u, doub
     // An initializer's [v, psi, b_a] with their correlations; the yaw's variance is the prior's.
     const std::array<int, 3> at{kV, kPsi, kBa};
     for (int i = 0; i < 3; ++i) {
-      for (int j = 0; j < 3; ++j) P.block<3, 3>(at[i], at[j]) = u.velocity_attitude_accel_bias->block<3, 3>(3 * i, 3 * j);
+      for (int j = 0; j < 3; ++j)
+        P.block<3, 3>(at[i], at[j]) = u.velocity_attitude_accel_bias->block<3, 3>(3 * i, 3 * j);
     }
     P.row(kPsi + 2).setZero();
     P.col(kPsi + 2).setZero();

@@ -268,8 +268,8 @@ TEST(MonteCarlo, ADynamicStartMidWalkIsQuickAndConsistent) {
   const sim::ConsistencySummary sum = sim::summarize("dynamic", runs);
   for (double d : sum.init_delay_s) EXPECT_LE(d, 1.5);
   ASSERT_EQ(sum.runs, kRuns);
-  std::printf("dynamic start: NEES pose first 10 s %.2f (band [%.2f, %.2f]), posyaw ATE %.3f m\n",
-              sum.nees_pose_early, sum.pose_band.lo, sum.pose_band.hi, sum.ate_posyaw_m);
+  std::printf("dynamic start: NEES pose first 10 s %.2f (band [%.2f, %.2f]), posyaw ATE %.3f m\n", sum.nees_pose_early,
+              sum.pose_band.lo, sum.pose_band.hi, sum.ate_posyaw_m);
   EXPECT_GT(sum.nees_pose_early, sum.pose_band.lo);
   EXPECT_LT(sum.nees_pose_early, sum.pose_band.hi);
 }

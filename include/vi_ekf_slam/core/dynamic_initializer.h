@@ -38,7 +38,7 @@ struct DynamicInitParams {
   double gyro_bias_sigma_radps = 0.01;   ///< initial std-dev of the (unknown) gyro bias [rad/s]
   /// std-dev of the (unknown) accelerometer bias [m/s^2]; set from the filter's prior
   double accel_bias_sigma_mps2 = 0.05;
-  double time_offset_sigma_s = 0.05;     ///< std-dev of the camera-IMU time offset it assumes [s]
+  double time_offset_sigma_s = 0.05;  ///< std-dev of the camera-IMU time offset it assumes [s]
   /// The frames' clock is searched for the best alignment within +- this [s] (0: taken as given).
   double time_offset_search_s = 0.1;
   double pixel_noise_px = 1.0;  ///< std-dev of a feature position [px]

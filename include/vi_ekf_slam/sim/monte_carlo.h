@@ -65,8 +65,8 @@ constexpr double kEarlyWindowS = 10.0;
 /// from their initialization on, over the number of frames every one of them has.
 struct ConsistencySummary {
   std::string name;
-  int runs = 0;          ///< runs that initialized
-  int runs_started = 0;  ///< runs in all
+  int runs = 0;                      ///< runs that initialized
+  int runs_started = 0;              ///< runs in all
   std::vector<double> init_delay_s;  ///< every run's RunResult::init_delay_s
   double ate_position_m = 0.0;       ///< mean over runs of the per-run position RMSE
   double ate_posyaw_m = 0.0;         ///< the same after posyaw alignment
@@ -78,7 +78,7 @@ struct ConsistencySummary {
   double nees_position = 0.0;  ///< time average of the run-averaged NEES
   double nees_orientation = 0.0;
   double nees_pose = 0.0;
-  double nees_pose_early = 0.0;  ///< the same over the first kEarlyWindowS after the initialization
+  double nees_pose_early = 0.0;      ///< the same over the first kEarlyWindowS after the initialization
   double consistent_fraction = 0.0;  ///< share of camera times with the run-averaged pose NEES in its 95% band
   double final_scale_ratio = 0.0;
   double mean_update_ms = 0.0;

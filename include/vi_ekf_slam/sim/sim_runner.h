@@ -69,7 +69,7 @@ struct FrameRecord {
   NavState estimate;
   FrameResult result;
   int landmarks_in_state = 0;
-  double filter_ms = 0.0;  ///< wall time of processFrame (propagation, update, new landmarks, composition)
+  double filter_ms = 0.0;      ///< wall time of processFrame (propagation, update, new landmarks, composition)
   double initialized_t = 0.0;  ///< when the filter was (last) initialized [s]
 };
 
