@@ -1,5 +1,8 @@
 #include "vi_ekf_slam/core/ekf_update.h"
 
+#include <limits>
+#include <optional>
+
 #include <Eigen/Cholesky>
 #include <algorithm>
 #include <cmath>
@@ -93,6 +96,17 @@ UpdateResult ekfUpdate(FilterState& state, const std::vector<FeatureObservation>
   Eigen::VectorXd r(m), d = Eigen::VectorXd::Zero(n);
   Eigen::LLT<Eigen::MatrixXd> llt;
   const int iterations = std::max(1, params.iterations);
+  // Step control: an iterate is kept only while the cost it minimizes, |d|^2_{P0^-1} +
+  // |z - h(x0 [+] d)|^2_R, decreases (plain Gauss-Newton overshot and diverged on some walks).
+  // Every iterate is d = P0 H^T lambda, so its prior term is lambda^T (S - R) lambda for the S of
+  // the linearization that produced it: no n x n inverse is needed.
+  double prior_cost = 0.0, accepted_cost = std::numeric_limits<double>::infinity();
+  struct Iterate {
+    Eigen::VectorXd d;
+    Eigen::MatrixXd PHt, S, K;
+    std::vector<AcceptedObservation> acc;
+  };
+  std::optional<Iterate> kept;
   for (int it = 0; it < iterations; ++it) {
     if (it > 0) {
       // Relinearize at x_i; an observation that can no longer be predicted ends the iterations
@@ -101,6 +115,7 @@ UpdateResult ekfUpdate(FilterState& state, const std::vector<FeatureObservation>
       state.boxplus(d);
       bool ok = true;
       std::vector<AcceptedObservation> next = acc;
+      double meas_cost = 0.0;
       for (auto& a : next) {
         const auto li = state.findLandmark(a.id);
         Eigen::Vector2d uv;
@@ -110,9 +125,21 @@ UpdateResult ekfUpdate(FilterState& state, const std::vector<FeatureObservation>
         }
         if (!predictImageVelocity(state.x, state.landmark(*li), camera, T_b_c, omega_b, &a.H_td)) a.H_td.setZero();
         a.residual = a.measured - uv - a.H_td * rowTime(a.measured.y());
+        meas_cost += a.residual.squaredNorm() / r_var;
       }
       if (!ok) break;
+      const double cost = prior_cost + meas_cost;
+      if (kept && !(cost < accepted_cost)) {  // worse than the last iterate: keep that one
+        d = kept->d;
+        PHt = kept->PHt;
+        S = kept->S;
+        K = kept->K;
+        acc = kept->acc;
+        break;
+      }
+      accepted_cost = cost;
       acc = std::move(next);
+      kept = Iterate{d, PHt, S, K, acc};
     }
     Eigen::VectorXd Hd(m);
     for (int j = 0; j < result.accepted; ++j) {
@@ -142,11 +169,38 @@ UpdateResult ekfUpdate(FilterState& state, const std::vector<FeatureObservation>
       return result;
     }
     K = llt.solve(PHt.transpose()).transpose();  // P H^T S^-1
-    const Eigen::VectorXd d_next = K * (r + Hd);
+    const Eigen::VectorXd lambda = llt.solve(r + Hd);
+    const Eigen::VectorXd d_next = PHt * lambda;  // = K (r + H d)
+    if (iterations > 1) prior_cost = lambda.dot(S * lambda) - r_var * lambda.squaredNorm();
     const double change = (d_next - d).lpNorm<Eigen::Infinity>();
     d = d_next;
     if (it == 0) result.nis_sum = r.dot(llt.solve(r));  // of the prior's prediction, as gated
     if (change < kIterationTolerance) break;
+    if (it + 1 == iterations && kept) {
+      // The last iterate, too, only if it lowers the cost.
+      restorePrior();
+      state.boxplus(d);
+      double meas_cost = 0.0;
+      bool ok = true;
+      for (const auto& a : acc) {
+        const auto li = state.findLandmark(a.id);
+        Eigen::Vector2d uv;
+        ObservationJacobians J;
+        if (!li || !predictObservation(state.x, state.landmark(*li), camera, T_b_c, &uv, &J)) {
+          ok = false;
+          break;
+        }
+        Eigen::Vector2d H_td = Eigen::Vector2d::Zero();
+        if (!predictImageVelocity(state.x, state.landmark(*li), camera, T_b_c, omega_b, &H_td)) H_td.setZero();
+        meas_cost += (a.measured - uv - H_td * rowTime(a.measured.y())).squaredNorm() / r_var;
+      }
+      if (!ok || !(prior_cost + meas_cost < accepted_cost)) {
+        d = kept->d;
+        PHt = kept->PHt;
+        S = kept->S;
+        K = kept->K;
+      }
+    }
   }
   restorePrior();
 

@@ -169,6 +169,51 @@ TEST(EkfUpdate, IteratedUpdateReachesTheMinimumOfThePriorAndObservationCost) {
   EXPECT_GT(es.eigenvalues().minCoeff(), -1e-9);
 }
 
+// Step control: far from the truth, plain Gauss-Newton can overshoot (the iterations diverged on
+// some simulated walks); the iterated update keeps an iterate only while the cost decreases, so
+// its result never costs more than the single EKF step, whatever the prior's width.
+TEST(EkfUpdate, IteratedUpdateNeverEndsAboveTheSingleStepsCost) {
+  const CameraModel cam = test::paperCamera();
+  const CameraExtrinsics T = test::forwardCamera();
+  int tried = 0, improved = 0;
+  for (int seed = 0; seed < 40; ++seed) {
+    std::mt19937_64 rng(100 + seed);
+    FilterState s0 = test::randomState(Mechanization::kWorldCentric, 6, rng);
+    s0.setCovariance((seed % 2 ? 25.0 : 100.0) * s0.covariance());
+    const Eigen::MatrixXd L = s0.covariance().llt().matrixL();
+    std::normal_distribution<double> n01;
+    Eigen::VectorXd e(s0.dim());
+    for (int i = 0; i < e.size(); ++i) e(i) = n01(rng);
+    FilterState truth = s0;
+    truth.boxplus(L * e);
+    const auto obs = perfectObservations(truth, cam, T);
+    if (obs.size() < 3) continue;
+    UpdateParams p;
+    p.gate_probability = 1.0 - 1e-12;
+    FilterState ekf = s0, iekf = s0;
+    const int n_ekf = ekfUpdate(ekf, obs, cam, T, p).accepted;
+    p.iterations = 5;
+    const int n_iekf = ekfUpdate(iekf, obs, cam, T, p).accepted;
+    ASSERT_EQ(n_ekf, n_iekf);
+    if (n_ekf != static_cast<int>(obs.size())) continue;
+    bool predictable = true;
+    for (const auto& o : obs) {
+      Eigen::Vector2d uv;
+      predictable = predictable && predictObservation(ekf.x, ekf.landmark(*ekf.findLandmark(o.id)), cam, T, &uv) &&
+                    predictObservation(iekf.x, iekf.landmark(*iekf.findLandmark(o.id)), cam, T, &uv);
+    }
+    if (!predictable) continue;
+    ++tried;
+    const double var = p.pixel_noise_px * p.pixel_noise_px;
+    const double c_ekf = mapCost(s0, ekf.boxminus(s0), obs, cam, T, var);
+    const double c_iekf = mapCost(s0, iekf.boxminus(s0), obs, cam, T, var);
+    EXPECT_LE(c_iekf, c_ekf * (1.0 + 1e-9) + 1e-9) << "seed " << seed;
+    improved += c_iekf < 0.99 * c_ekf;
+  }
+  EXPECT_GE(tried, 10);
+  EXPECT_GE(improved, 3);  // the iterations do run (and help) where they can
+}
+
 TEST(EkfUpdate, RollingShutterRowTimesAreCompensated) {
   // A rolling-shutter image of a moving rig: the row at v is read readout * (v / height - 1/2)
   // after the middle row, when the state is at. Observations made at those times fit the state
