@@ -1,5 +1,7 @@
 #include <gtest/gtest.h>
 
+#include <cstdio>
+
 #include <Eigen/Eigenvalues>
 #include <algorithm>
 #include <iostream>
@@ -176,7 +178,7 @@ TEST(EkfUpdate, IteratedUpdateNeverEndsAboveTheSingleStepsCost) {
   const CameraModel cam = test::paperCamera();
   const CameraExtrinsics T = test::forwardCamera();
   int tried = 0, improved = 0;
-  for (int seed = 0; seed < 40; ++seed) {
+  for (int seed = 0; seed < 100; ++seed) {
     std::mt19937_64 rng(100 + seed);
     FilterState s0 = test::randomState(Mechanization::kWorldCentric, 6, rng);
     s0.setCovariance((seed % 2 ? 25.0 : 100.0) * s0.covariance());
@@ -210,6 +212,7 @@ TEST(EkfUpdate, IteratedUpdateNeverEndsAboveTheSingleStepsCost) {
     EXPECT_LE(c_iekf, c_ekf * (1.0 + 1e-9) + 1e-9) << "seed " << seed;
     improved += c_iekf < 0.99 * c_ekf;
   }
+  std::printf("%d updates compared, %d lowered by the iterations\n", tried, improved);
   EXPECT_GE(tried, 10);
   EXPECT_GE(improved, 3);  // the iterations do run (and help) where they can
 }
