@@ -15,6 +15,7 @@ namespace vi_ekf_slam::glue {
 EkfSlamProcessor::EkfSlamProcessor(const NodeParams& params, OutputSink& sink, const tf2::BufferCore* tf)
     : params_(params), sink_(sink), tf_(tf), static_init_(params.static_init) {
   if (params_.node.tune_allocator) tuneAllocatorForLargeBuffers();
+  body_frame_ = params_.node.body_frame;  // "": from the first IMU message
   if (params_.node.extrinsic_source == "parameters") {
     const auto& v = params_.node.T_b_c;
     CameraExtrinsics T;
@@ -113,19 +114,22 @@ bool EkfSlamProcessor::cameraReady(const std::string& image_frame) {
       reportProblem("image has no frame_id: cannot look up the camera-IMU transform");
       return false;
     }
-    if (image_frame == params_.node.body_frame) {
+    if (body_frame_.empty()) {
+      reportProblem("waiting for IMU messages (their frame_id is the IMU frame of the camera-IMU transform)");
+      return false;
+    }
+    if (image_frame == body_frame_) {
       extrinsics_ = CameraExtrinsics();
     } else if (!tf_) {
       reportProblem("no TF available for the camera-IMU transform");
       return false;
     } else {
       try {
-        const auto t = tf_->lookupTransform(params_.node.body_frame, image_frame, ros::Time(0));
+        const auto t = tf_->lookupTransform(body_frame_, image_frame, ros::Time(0));
         extrinsics_ = extrinsicsFromTransform(t.transform);
-        ROS_INFO("vi_ekf_slam: camera-IMU transform %s <- %s from TF", params_.node.body_frame.c_str(),
-                 image_frame.c_str());
+        ROS_INFO("vi_ekf_slam: camera-IMU transform %s <- %s from TF", body_frame_.c_str(), image_frame.c_str());
       } catch (const tf2::TransformException& e) {
-        reportProblem("waiting for TF " + params_.node.body_frame + " <- " + image_frame + ": " + e.what());
+        reportProblem("waiting for TF " + body_frame_ + " <- " + image_frame + ": " + e.what());
         return false;
       }
     }
@@ -193,6 +197,11 @@ void EkfSlamProcessor::imu(const sensor_msgs::Imu& msg) {
   }
   last_imu_t_ = d->timestamp;
   last_gyro_ = d->wm;
+  if (body_frame_.empty()) {
+    body_frame_ = !msg.header.frame_id.empty() ? msg.header.frame_id : "imu";
+    ROS_INFO("vi_ekf_slam: IMU frame '%s' (the IMU messages' frame_id%s)", body_frame_.c_str(),
+             msg.header.frame_id.empty() ? " is empty: the default" : "");
+  }
   if (auto r = static_init_.addImu(*d)) static_result_ = r;
   if (dynamic_init_ && filter_ && !filter_->initialized()) dynamic_init_->addImu(*d);
   if (filter_) {
@@ -374,7 +383,7 @@ void EkfSlamProcessor::output(const PendingImage& img, const CameraFrame& frame,
   // stamp plus the estimated camera-IMU time offset).
   ros::Time stamp;
   stamp.fromSec(nav.timestamp);
-  const nav_msgs::Odometry odom = toOdometry(nav, last_gyro_ - nav.b_g, w_var, stamp, o.world_frame, o.body_frame);
+  const nav_msgs::Odometry odom = toOdometry(nav, last_gyro_ - nav.b_g, w_var, stamp, o.world_frame, body_frame_);
   if (!allFinite(odom)) {
     reset("non-finite odometry");
     return;

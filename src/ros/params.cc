@@ -329,7 +329,7 @@ std::string loadParams(const ParamSource& source, NodeParams* out) {
   rd("max_image_gap_s", n.max_image_gap_s);
 
   err << fromReconfigure(c, &p);
-  if (n.world_frame.empty() || n.body_frame.empty()) err << "world_frame and body_frame must not be empty\n";
+  if (n.world_frame.empty()) err << "world_frame must not be empty\n";
   if (n.world_frame == n.body_frame) err << "world_frame and body_frame must differ\n";
   if (n.extrinsic_source != "tf" && n.extrinsic_source != "parameters") {
     err << "extrinsic_source must be 'tf' or 'parameters' (got '" << n.extrinsic_source << "')\n";
@@ -360,8 +360,9 @@ std::string describeParams(const NodeParams& p) {
   const TrackerParams& t = p.tracker;
   const NodeOptions& n = p.node;
   s << "vi_ekf_slam parameters:\n"
-    << "  frames: world_frame=" << n.world_frame << " body_frame=" << n.body_frame << " publish_tf=" << n.publish_tf
-    << " tune_allocator=" << n.tune_allocator << "\n"
+    << "  frames: world_frame=" << n.world_frame
+    << " body_frame=" << (n.body_frame.empty() ? "(the IMU messages' frame_id)" : n.body_frame)
+    << " publish_tf=" << n.publish_tf << " tune_allocator=" << n.tune_allocator << "\n"
     << "  mechanization=" << toString(f.mechanization) << " composition_trigger=" << toString(f.composition_trigger)
     << " composition_new_landmarks=" << f.composition_new_landmarks << "\n"
     << "  landmark_init=" << toString(f.landmark_init) << " landmark_depth_m=" << f.landmark_depth_m

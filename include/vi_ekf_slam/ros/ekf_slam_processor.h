@@ -76,6 +76,8 @@ class EkfSlamProcessor {
   const NodeParams& params() const { return params_; }
   const InputCounters& counters() const { return counters_; }
   const std::string& lastProblem() const { return last_problem_; }
+  /// The IMU frame: body_frame, or the frame_id of the first IMU message ("" before it).
+  const std::string& bodyFrame() const { return body_frame_; }
   /// Why the filter was last found lost (empty if never).
   const std::string& lastLost() const { return last_lost_; }
   const EkfSlam* filter() const { return filter_.get(); }
@@ -127,6 +129,7 @@ class EkfSlamProcessor {
   int last_tracks_ = 0;
   double last_update_ms_ = 0.0, last_tracker_ms_ = 0.0, total_processing_ms_ = 0.0;
   std::string last_problem_, last_lost_;
+  std::string body_frame_;  ///< see bodyFrame()
 };
 
 }  // namespace vi_ekf_slam::glue

@@ -17,7 +17,9 @@ namespace vi_ekf_slam::glue {
 
 struct NodeOptions {
   std::string world_frame = "world";  ///< fixed frame of the outputs (z up)
-  std::string body_frame = "imu";     ///< the IMU/body frame, child of world_frame
+  /// The IMU/body frame, child of world_frame; "": the frame_id of the IMU messages ("imu" if
+  /// they carry none).
+  std::string body_frame;
   bool publish_tf = true;
   bool tune_allocator = true;                         ///< see core/allocator_tuning.h
   std::string camera_calibration_file;                ///< ROS camera YAML used while no camera_info arrives
