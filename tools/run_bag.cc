@@ -18,6 +18,9 @@
 // rig:= loads a rig file (calibration values) on top of config:= (default config/vi_ekf_slam.yaml).
 // Writes to out (default results/run_bag/<bag name>) with <run>.tum and the plots of
 // tools/plot_run.py (plots:=false to skip them).
+// Inputs: imu_topic:=, image_topic:= (sensor_msgs/Image or CompressedImage) and
+// camera_info_topic:= pick the topics; by default the one topic of each type the bag has (with
+// several, the tool says which and asks to choose).
 #include <algorithm>
 #include <chrono>
 #include <iomanip>
@@ -32,6 +35,8 @@
 #include <tf2_eigen/tf2_eigen.h>
 #include <tf2_msgs/TFMessage.h>
 #include <nlohmann/json.hpp>
+#include <cv_bridge/cv_bridge.h>
+#include <sensor_msgs/CompressedImage.h>
 #include <sensor_msgs/point_cloud2_iterator.h>
 #include <sstream>
 
@@ -294,6 +299,51 @@ eval::RunMetrics evaluateRecording(const std::string& path, const glue::InputBag
   return eval::evaluateRun(sink.poses, info.truth, lms, glue::landmarkTruthFromWorld(info));
 }
 
+/// The topics the processor is fed from.
+struct InputTopics {
+  std::string imu, image, camera_info;
+};
+
+/// imu_topic:=, image_topic:=, camera_info_topic:= as given (checked against the bag), or the one
+/// topic of each type the bag holds; several, or none, is an error that lists them.
+InputTopics chooseInputTopics(const std::string& bag_path, std::map<std::string, std::string>& args) {
+  rosbag::Bag bag(bag_path, rosbag::bagmode::Read);
+  rosbag::View view(bag);
+  std::map<std::string, std::string> types;  // topic -> datatype
+  for (const rosbag::ConnectionInfo* c : view.getConnections()) types[c->topic] = c->datatype;
+  auto choose = [&](const std::string& arg, const std::vector<std::string>& accepted) {
+    std::vector<std::string> found;
+    for (const auto& [topic, type] : types) {
+      if (std::find(accepted.begin(), accepted.end(), type) != accepted.end()) found.push_back(topic);
+    }
+    std::string list;
+    for (const auto& t : found) list += " " + t + " (" + types[t] + ")";
+    if (args.count(arg)) {
+      const std::string& t = args[arg];
+      if (std::find(found.begin(), found.end(), t) == found.end()) {
+        throw std::runtime_error(arg + ":=" + t + " is not a topic of type " + accepted.front() +
+                                 " in the bag; it has:" + (list.empty() ? std::string(" none") : list));
+      }
+      return t;
+    }
+    if (found.size() != 1) {
+      throw std::runtime_error("the bag has " + std::to_string(found.size()) + " topics of type " + accepted.front() +
+                               (list.empty() ? std::string("") : ":" + list) + "; choose one with " + arg + ":=");
+    }
+    return found.front();
+  };
+  InputTopics t;
+  t.imu = choose("imu_topic", {"sensor_msgs/Imu"});
+  t.image = choose("image_topic", {"sensor_msgs/Image", "sensor_msgs/CompressedImage"});
+  // camera_info is optional (camera_calibration_file:= may give the intrinsics instead).
+  try {
+    t.camera_info = choose("camera_info_topic", {"sensor_msgs/CameraInfo"});
+  } catch (const std::exception&) {
+    if (args.count("camera_info_topic")) throw;
+  }
+  return t;
+}
+
 int main(int argc, char** argv) {
   ros::Time::init();  // no master: wall time for the (throttled) log messages only
   std::map<std::string, std::string> args;
@@ -308,7 +358,7 @@ int main(int argc, char** argv) {
   }
   if (!args.count("bag")) {
     std::cerr << "usage: vi_ekf_slam_run_bag bag:=FILE [out:=DIR] [config:=YAML] [mechanization:=NAME|all] "
-                 "[PARAM:=VALUE ...]\n";
+                 "[imu_topic:=T] [image_topic:=T] [camera_info_topic:=T] [PARAM:=VALUE ...]\n";
     return 2;
   }
   const std::string bag_path = args["bag"];
@@ -339,6 +389,13 @@ int main(int argc, char** argv) {
   } catch (const std::exception& e) {
     std::cerr << "error: " << e.what() << "\n";
     return 1;
+  }
+  InputTopics inputs;
+  try {
+    inputs = chooseInputTopics(bag_path, args);
+  } catch (const std::exception& e) {
+    std::cerr << "error: " << e.what() << "\n";
+    return 2;
   }
   std::vector<std::pair<std::string, eval::RunMetrics>> results;
   if (args.count("recorded")) {
@@ -375,7 +432,7 @@ int main(int argc, char** argv) {
     }();
     for (const auto& [k, v] : args) {
       if (k != "bag" && k != "out" && k != "config" && k != "mechanization" && k != "plots" &&
-          k.rfind("reference", 0) != 0)
+          k.rfind("reference", 0) != 0 && k != "imu_topic" && k != "image_topic" && k != "camera_info_topic")
         yaml.set(k, v);
     }
     if (!m.empty()) yaml.set("mechanization", m);
@@ -394,13 +451,21 @@ int main(int argc, char** argv) {
     const auto tic = std::chrono::steady_clock::now();
     for (const rosbag::MessageInstance& msg : view) {
       const std::string& topic = msg.getTopic();
-      if (auto imu = msg.instantiate<sensor_msgs::Imu>())
-        processor.imu(*imu);
-      else if (auto img = msg.instantiate<sensor_msgs::Image>())
-        processor.image(*img);
-      else if (auto ci = msg.instantiate<sensor_msgs::CameraInfo>())
-        processor.cameraInfo(*ci);
-      else if (topic == "/tf_static" || topic == "/tf") {
+      if (topic == inputs.imu) {
+        if (auto imu = msg.instantiate<sensor_msgs::Imu>()) processor.imu(*imu);
+      } else if (topic == inputs.image) {
+        if (auto img = msg.instantiate<sensor_msgs::Image>()) {
+          processor.image(*img);
+        } else if (auto c = msg.instantiate<sensor_msgs::CompressedImage>()) {
+          try {
+            processor.image(*cv_bridge::toCvCopy(*c, "mono8")->toImageMsg());
+          } catch (const std::exception& e) {
+            std::cerr << "warning: compressed image at " << c->header.stamp << " not decoded: " << e.what() << "\n";
+          }
+        }
+      } else if (topic == inputs.camera_info) {
+        if (auto ci = msg.instantiate<sensor_msgs::CameraInfo>()) processor.cameraInfo(*ci);
+      } else if (topic == "/tf_static" || topic == "/tf") {
         if (auto t = msg.instantiate<tf2_msgs::TFMessage>()) {
           for (const auto& tr : t->transforms) tf.setTransform(tr, "bag", topic == "/tf_static");
         }
