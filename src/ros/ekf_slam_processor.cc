@@ -195,6 +195,12 @@ void EkfSlamProcessor::imu(const sensor_msgs::Imu& msg) {
     ++counters_.imu_gaps;
     reportProblem("IMU gap of " + std::to_string(d->timestamp - last_imu_t_) + " s");
   }
+  if (last_imu_t_ > -1e299) {
+    const double dt = d->timestamp - last_imu_t_;
+    if (dt > 0.0 && dt <= params_.filter.max_imu_gap_s) {
+      imu_period_s_ = imu_period_s_ > 0.0 ? 0.99 * imu_period_s_ + 0.01 * dt : dt;
+    }
+  }
   last_imu_t_ = d->timestamp;
   last_gyro_ = d->wm;
   if (body_frame_.empty()) {
@@ -377,8 +383,11 @@ void EkfSlamProcessor::processImage(PendingImage& img) {
 void EkfSlamProcessor::output(const PendingImage& img, const CameraFrame& frame, const FrameResult& r) {
   const NavState nav = filter_->navState();
   const NodeOptions& o = params_.node;
+  // The angular velocity published is one gyro sample: its variance is the noise density^2 times
+  // the IMU's rate (measured; 200 Hz until known).
+  const double rate_hz = imu_period_s_ > 0.0 ? 1.0 / imu_period_s_ : 200.0;
   const double w_var =
-      params_.filter.imu_noise.gyro_noise_density * params_.filter.imu_noise.gyro_noise_density * 200.0;
+      params_.filter.imu_noise.gyro_noise_density * params_.filter.imu_noise.gyro_noise_density * rate_hz;
   // Every output is stamped on the IMU clock, at the time of the state it carries (the image
   // stamp plus the estimated camera-IMU time offset).
   ros::Time stamp;

@@ -25,7 +25,9 @@ class KeepingSink : public OutputSink {
   std::vector<double> time_offsets;
   std::vector<std::string> events;
   double max_speed_mps = 0.0;
+  double angular_rate_var = 0.0;  ///< the last odometry's twist covariance of omega_x [rad^2/s^2]
   void odometry(const nav_msgs::Odometry& o) override {
+    angular_rate_var = o.twist.covariance[21];
     eval::StampedPose p;
     p.t = o.header.stamp.toSec();
     tf2::fromMsg(o.pose.pose.position, p.p);
@@ -53,6 +55,8 @@ sensor_msgs::Imu imuMsg(const ImuData& d) {
 
 struct RunResult {
   double first_image_t = 0.0;  ///< stamp of the first image given [s]
+  double imu_rate_hz = 0.0;    ///< of the recording
+  double gyro_noise_density = 0.0;
   KeepingSink sink;
   eval::ReferenceComparison sfm;
 };
@@ -81,6 +85,8 @@ std::optional<RunResult> runSegment(double start_s, double seconds, const std::s
   params.node.T_b_c = {
       cam.T_b_c.p_b_c.x(), cam.T_b_c.p_b_c.y(), cam.T_b_c.p_b_c.z(), q_b_c.x(), q_b_c.y(), q_b_c.z(), q_b_c.w()};
   RunResult out;
+  out.imu_rate_hz = (imu.size() - 1) / (imu.back().timestamp - imu.front().timestamp);
+  out.gyro_noise_density = params.filter.imu_noise.gyro_noise_density;
   EkfSlamProcessor processor(params, out.sink, nullptr);
   std_msgs::Header h;
   h.frame_id = "camera";
@@ -123,6 +129,13 @@ TEST(RealHandheld, First15SecondsTrackWithTheDefaultsAndFindTheTimeOffset) {
   expectTracked(*r, "defaults");
   EXPECT_LT(r->sfm.position_rmse_m, 0.082);
   EXPECT_NEAR(r->sink.time_offsets.back(), -0.047, 0.005);  // from 0: the image stamps are 45-49 ms late
+  // The published angular velocity is one gyro sample: its variance is the white noise at the
+  // IMU's own rate (219 Hz here, not an assumed 200 Hz) plus the gyro bias's (at most its prior).
+  const double w_var = r->gyro_noise_density * r->gyro_noise_density * r->imu_rate_hz;
+  std::printf("IMU %.1f Hz: omega variance %.3g, white noise %.3g rad^2/s^2\n", r->imu_rate_hz,
+              r->sink.angular_rate_var, w_var);
+  EXPECT_GE(r->sink.angular_rate_var, 0.98 * w_var);  // (the rate is a running average; 200 Hz would be 9% low)
+  EXPECT_LT(r->sink.angular_rate_var, w_var + 0.002 * 0.002);
 }
 
 // The rig file holds only what a calibration gives (extrinsic, measured IMU white noise, the

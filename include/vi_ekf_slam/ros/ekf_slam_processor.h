@@ -122,6 +122,7 @@ class EkfSlamProcessor {
   std::deque<PendingImage> queue_;
   std::unordered_map<std::int64_t, Birth> births_;
   double last_imu_t_ = -1e300, last_image_t_ = -1e300;
+  double imu_period_s_ = 0.0;  ///< the IMU's sample interval, averaged (0: not yet known) [s]
   Vec3 last_gyro_ = Vec3::Zero();
   std::optional<Quat> prev_q_n_b_;
   double last_processed_t_ = -1e300;  ///< stamp of the last processed image [s]
