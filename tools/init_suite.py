@@ -14,18 +14,15 @@ registration does not enter.
 """
 import argparse
 import json
-import math
 import os
 import subprocess
 import sys
 
+from suite import fmt
+
 TRAJECTORIES = [("builtin", "builtin"), ("tum_corridor", "trajectories/tum_corridor1_512_16_okvis.txt"),
                 ("euroc_V1_01", "trajectories/euroc_V1_01_easy.txt")]
 INIT_WITHIN_S = 1.5
-
-
-def fmt(v, digits=3):
-    return "-" if v is None or (isinstance(v, float) and not math.isfinite(v)) else ("%.*f" % (digits, v))
 
 
 def study(a, traj, init, out):

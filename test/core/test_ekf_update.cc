@@ -104,6 +104,17 @@ TEST(EkfUpdate, GateProbabilityIsConfigurable) {
 }
 
 namespace {
+/// A state drawn from s0's mean and covariance.
+FilterState drawFromPrior(const FilterState& s0, std::mt19937_64& rng) {
+  const Eigen::MatrixXd L = s0.covariance().llt().matrixL();
+  std::normal_distribution<double> n01;
+  Eigen::VectorXd e(s0.dim());
+  for (int i = 0; i < e.size(); ++i) e(i) = n01(rng);
+  FilterState x = s0;
+  x.boxplus(L * e);
+  return x;
+}
+
 /// The iterated update's objective: the prior's and the observations' Mahalanobis terms at
 /// x0 [+] d (observations noise-free from a true state).
 double mapCost(const FilterState& s0, const Eigen::VectorXd& d, const std::vector<FeatureObservation>& obs,
@@ -131,13 +142,7 @@ TEST(EkfUpdate, IteratedUpdateReachesTheMinimumOfThePriorAndObservationCost) {
   FilterState s0 = test::randomState(Mechanization::kWorldCentric, 4, rng);
   s0.setCovariance(9.0 * s0.covariance());  // sigmas 3x those of randomState
   // The truth: a draw from the prior; noise-free observations of it.
-  const Eigen::MatrixXd L = s0.covariance().llt().matrixL();
-  std::normal_distribution<double> n01;
-  Eigen::VectorXd e(s0.dim());
-  for (int i = 0; i < e.size(); ++i) e(i) = n01(rng);
-  FilterState truth = s0;
-  truth.boxplus(L * e);
-  const auto obs = perfectObservations(truth, cam, T);
+  const auto obs = perfectObservations(drawFromPrior(s0, rng), cam, T);
   ASSERT_EQ(obs.size(), 4u);
   UpdateParams p;
   p.gate_probability = 1.0 - 1e-9;
@@ -182,13 +187,7 @@ TEST(EkfUpdate, IteratedUpdateNeverEndsAboveTheSingleStepsCost) {
     std::mt19937_64 rng(100 + seed);
     FilterState s0 = test::randomState(Mechanization::kWorldCentric, 6, rng);
     s0.setCovariance((seed % 2 ? 25.0 : 100.0) * s0.covariance());
-    const Eigen::MatrixXd L = s0.covariance().llt().matrixL();
-    std::normal_distribution<double> n01;
-    Eigen::VectorXd e(s0.dim());
-    for (int i = 0; i < e.size(); ++i) e(i) = n01(rng);
-    FilterState truth = s0;
-    truth.boxplus(L * e);
-    const auto obs = perfectObservations(truth, cam, T);
+    const auto obs = perfectObservations(drawFromPrior(s0, rng), cam, T);
     if (obs.size() < 3) continue;
     UpdateParams p;
     p.gate_probability = 1.0 - 1e-12;
