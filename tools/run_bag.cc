@@ -347,8 +347,19 @@ InputTopics chooseInputTopics(const std::string& bag_path, std::map<std::string,
 int main(int argc, char** argv) {
   ros::Time::init();  // no master: wall time for the (throttled) log messages only
   std::map<std::string, std::string> args;
+  const char* const usage =
+      "usage: vi_ekf_slam_run_bag bag:=FILE [out:=DIR] [config:=YAML] [rig:=YAML] [mechanization:=NAME|all] "
+      "[imu_topic:=T] [image_topic:=T] [camera_info_topic:=T] [plots:=false] [reference:=FILE.tum[,...] "
+      "[reference_alignment:=sim3|se3|posyaw] [reference_frame:=body|camera] [reference_clock:=imu|camera]] "
+      "[PARAM:=VALUE ...]\n"
+      "       vi_ekf_slam_run_bag bag:=FILE recorded:=NAME=REC.bag[,...] [out:=DIR]\n"
+      "Runs the node's processor over a bag offline (deterministic, as fast as the CPU allows) and evaluates it.\n";
   for (int i = 1; i < argc; ++i) {
     const std::string a = argv[i];
+    if (a == "--help" || a == "-h") {
+      std::cout << usage;
+      return 0;
+    }
     const auto k = a.find(":=");
     if (k == std::string::npos) {
       std::cerr << "arguments are NAME:=VALUE (got '" << a << "')\n";
@@ -357,8 +368,7 @@ int main(int argc, char** argv) {
     args[a.substr(0, k)] = a.substr(k + 2);
   }
   if (!args.count("bag")) {
-    std::cerr << "usage: vi_ekf_slam_run_bag bag:=FILE [out:=DIR] [config:=YAML] [mechanization:=NAME|all] "
-                 "[imu_topic:=T] [image_topic:=T] [camera_info_topic:=T] [PARAM:=VALUE ...]\n";
+    std::cerr << "error: bag:= is missing\n" << usage;
     return 2;
   }
   const std::string bag_path = args["bag"];

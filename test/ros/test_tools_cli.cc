@@ -88,6 +88,9 @@ TEST(ToolsCli, RunBagPicksTopicsAndReadsCompressedImages) {
       }
     }
   }
+  const Outcome help = run(std::string(VI_TOOL_RUN_BAG) + " --help");
+  EXPECT_EQ(help.code, 0) << help.output;
+  EXPECT_NE(help.output.find("image_topic:="), std::string::npos) << help.output;
   const std::string base =
       std::string(VI_TOOL_RUN_BAG) + " bag:=" + dir + "/user.bag out:=" + dir + "/out plots:=false";
   const Outcome ambiguous = run(base);
