@@ -122,34 +122,51 @@ double EkfSlam::latestImuTime() const {
 bool EkfSlam::propagateTo(double t) {
   if (!initialized_ || !std::isfinite(t) || t < state_.timestamp) return false;
   if (imu_.empty() || imu_.back().timestamp < t) return false;
+  integrateImu(state_, t, &last_gyro_);
+  while (imu_.size() > 1 && imu_[1].timestamp <= t) imu_.pop_front();
+  return true;
+}
+
+void EkfSlam::integrateImu(FilterState& s, double t, Vec3* last_gyro) const {
   auto integrate = [&](double t0, double t1, const Vec3& wm, const Vec3& am) {
     if (t1 <= t0) return;
-    propagateState(state_, wm, am, t1 - t0, config_.imu_noise, g_n_);
-    last_gyro_ = wm;
+    propagateState(s, wm, am, t1 - t0, config_.imu_noise, g_n_);
+    *last_gyro = wm;
   };
   // Before the first buffered sample: hold it.
-  if (state_.timestamp < imu_.front().timestamp) {
-    integrate(state_.timestamp, std::min(t, imu_.front().timestamp), imu_.front().wm, imu_.front().am);
+  if (s.timestamp < imu_.front().timestamp) {
+    integrate(s.timestamp, std::min(t, imu_.front().timestamp), imu_.front().wm, imu_.front().am);
   }
   for (size_t k = 0; k + 1 < imu_.size(); ++k) {
     const ImuData& a = imu_[k];
     const ImuData& b = imu_[k + 1];
-    const double t0 = std::max(a.timestamp, state_.timestamp);
+    const double t0 = std::max(a.timestamp, s.timestamp);
     const double t1 = std::min(b.timestamp, t);
     if (t1 > t0) {
       // Mean of the linearly interpolated measurements over [t0, t1] = value at its middle.
       const double alpha = (0.5 * (t0 + t1) - a.timestamp) / (b.timestamp - a.timestamp);
       integrate(t0, t1, (1.0 - alpha) * a.wm + alpha * b.wm, (1.0 - alpha) * a.am + alpha * b.am);
-      if (b.timestamp - a.timestamp > config_.max_imu_gap_s) addGapUncertainty(t1 - t0);
+      if (b.timestamp - a.timestamp > config_.max_imu_gap_s) addGapUncertainty(s, t1 - t0);
     }
     if (b.timestamp >= t) break;
   }
-  state_.timestamp = t;
-  while (imu_.size() > 1 && imu_[1].timestamp <= t) imu_.pop_front();
-  return true;
+  s.timestamp = t;
 }
 
-void EkfSlam::addGapUncertainty(double dt) {
+std::optional<NavState> EkfSlam::predictedNavState(Vec3* angular_rate) const {
+  if (!initialized_ || imu_.empty() || imu_.back().timestamp < state_.timestamp) return std::nullopt;
+  // The motion state alone (no landmarks): the same propagation at a 21x21 cost.
+  FilterState s(state_.mechanization());
+  s.timestamp = state_.timestamp;
+  s.x = state_.x;
+  s.setCovariance(state_.motionCovariance());
+  Vec3 w = last_gyro_;
+  integrateImu(s, imu_.back().timestamp, &w);
+  if (angular_rate) *angular_rate = w - s.x.b_g;
+  return vi_ekf_slam::navState(s);
+}
+
+void EkfSlam::addGapUncertainty(FilterState& s, double dt) const {
   // An unknown acceleration of size sa ~ N(0, sa^2 I) over dt moves v by up to a dt and p by
   // a dt^2/2; an unknown rate turns the attitude by w dt. The position and velocity parts are
   // kept uncorrelated: a walking torso's acceleration swings within a gap, so the velocity it
@@ -158,14 +175,14 @@ void EkfSlam::addGapUncertainty(double dt) {
   // the position alone, wrongly and with confidence: the gate then rejects every later
   // observation. SensorFaults.FilterRidesThroughDropoutGapOutliersAndCoveredCamera.)
   using namespace idx;
-  const int m = state_.motionDim();
+  const int m = s.motionDim();
   const double sa = config_.imu_gap_accel_sigma_mps2, sg = config_.imu_gap_gyro_sigma_radps;
   MotionMatrix Q = MotionMatrix::Zero(m, m);
   const double qa = sa * sa;
   Q.block<3, 3>(kP, kP).diagonal().setConstant(qa * std::pow(dt, 4) / 4.0);
   Q.block<3, 3>(kV, kV).diagonal().setConstant(qa * dt * dt);
   Q.block<3, 3>(kPsi, kPsi).diagonal().setConstant(sg * sg * dt * dt);
-  state_.propagateCovariance(MotionMatrix::Identity(m, m), Q);
+  s.propagateCovariance(MotionMatrix::Identity(m, m), Q);
 }
 
 int EkfSlam::initialize(const DynamicInitResult& aligned, const NavState& registered) {

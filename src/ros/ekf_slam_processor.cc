@@ -213,6 +213,7 @@ void EkfSlamProcessor::imu(const sensor_msgs::Imu& msg) {
   if (filter_) {
     filter_->addImu(*d);
     tryInitialize(d->timestamp);
+    publishImuRatePose();
     processQueue();
   }
 }
@@ -383,11 +384,7 @@ void EkfSlamProcessor::processImage(PendingImage& img) {
 void EkfSlamProcessor::output(const PendingImage& img, const CameraFrame& frame, const FrameResult& r) {
   const NavState nav = filter_->navState();
   const NodeOptions& o = params_.node;
-  // The angular velocity published is one gyro sample: its variance is the noise density^2 times
-  // the IMU's rate (measured; 200 Hz until known).
-  const double rate_hz = imu_period_s_ > 0.0 ? 1.0 / imu_period_s_ : 200.0;
-  const double w_var =
-      params_.filter.imu_noise.gyro_noise_density * params_.filter.imu_noise.gyro_noise_density * rate_hz;
+  const double w_var = angularRateVariance();
   // Every output is stamped on the IMU clock, at the time of the state it carries (the image
   // stamp plus the estimated camera-IMU time offset).
   ros::Time stamp;
@@ -456,6 +453,25 @@ void EkfSlamProcessor::output(const PendingImage& img, const CameraFrame& frame,
   s.gyro_bias.y = nav.b_g.y();
   s.gyro_bias.z = nav.b_g.z();
   sink_.status(s);
+}
+
+double EkfSlamProcessor::angularRateVariance() const {
+  // The angular velocity published is one gyro sample: its variance is the noise density^2 times
+  // the IMU's rate (measured; 200 Hz until known).
+  const double rate_hz = imu_period_s_ > 0.0 ? 1.0 / imu_period_s_ : 200.0;
+  return params_.filter.imu_noise.gyro_noise_density * params_.filter.imu_noise.gyro_noise_density * rate_hz;
+}
+
+void EkfSlamProcessor::publishImuRatePose() {
+  if (!filter_ || !filter_->initialized() || !sink_.wantsImuOdometry()) return;
+  Vec3 w_b;
+  const std::optional<NavState> nav = filter_->predictedNavState(&w_b);
+  if (!nav) return;
+  ros::Time stamp;
+  stamp.fromSec(nav->timestamp);
+  const nav_msgs::Odometry odom =
+      toOdometry(*nav, w_b, angularRateVariance(), stamp, params_.node.world_frame, body_frame_);
+  if (allFinite(odom)) sink_.imuOdometry(odom);
 }
 
 }  // namespace vi_ekf_slam::glue

@@ -21,6 +21,7 @@ EkfSlamRos::EkfSlamRos(ros::NodeHandle nh, ros::NodeHandle pnh) : nh_(nh), pnh_(
   updater_.add("inputs", this, &EkfSlamRos::diagnoseInputs);
   updater_.add("filter", this, &EkfSlamRos::diagnoseFilter);
   odom_pub_ = nh_.advertise<nav_msgs::Odometry>("odom", 50);
+  odom_imu_pub_ = nh_.advertise<nav_msgs::Odometry>("odom_imu", 200);
   path_pub_ = nh_.advertise<nav_msgs::Path>("path", 2);
   landmarks_pub_ = nh_.advertise<sensor_msgs::PointCloud2>("landmarks", 2);
   status_pub_ = nh_.advertise<vi_ekf_slam::FilterStatus>("status", 10);

@@ -245,3 +245,38 @@ TEST(EkfSlam, AnInitializerThatKnowsItsHeadingOnlyCorrelatesVelocityAndYaw) {
   EXPECT_EQ(c_v_yaw, 0.0);
   EXPECT_EQ(c_psi_ba, 0.0);
 }
+
+// The IMU-rate pose between images is the filter's state propagated through the IMU samples
+// buffered past it, exactly as the next image will propagate it, and leaves the filter unchanged.
+TEST(EkfSlam, ThePredictedStateIsTheNextPropagationAndChangesNothing) {
+  EkfSlamConfig cfg;
+  for (Mechanization m : {Mechanization::kWorldCentric, Mechanization::kSensorCentricComposition}) {
+    cfg.mechanization = m;
+    EkfSlam f(cfg, sim::paperCamera(), sim::torsoCameraExtrinsics());
+    EXPECT_FALSE(f.predictedNavState().has_value());  // not initialized
+    NavState init;
+    init.v_n_b = Vec3(1.0, 0.2, 0.0);
+    f.initialize(init);
+    for (int k = 0; k <= 40; ++k) {
+      ImuData d;
+      d.timestamp = 0.005 * k;
+      d.wm = Vec3(0.1, -0.2, 0.3);
+      d.am = Vec3(0.5 * std::sin(k), 0.3, -9.81);
+      ASSERT_TRUE(f.addImu(d));
+    }
+    Vec3 w;
+    const std::optional<NavState> pred = f.predictedNavState(&w);
+    ASSERT_TRUE(pred.has_value());
+    EXPECT_EQ(f.state().timestamp, 0.0);  // unchanged
+    EkfSlam g = f;
+    ASSERT_TRUE(g.propagateTo(0.2));
+    const NavState n = g.navState();
+    EXPECT_NEAR(pred->timestamp, 0.2, 1e-12);
+    EXPECT_LT((pred->p_n_b - n.p_n_b).norm(), 1e-12);
+    EXPECT_LT((pred->v_n_b - n.v_n_b).norm(), 1e-12);
+    EXPECT_LT(pred->q_n_b.angularDistance(n.q_n_b), 1e-12);
+    const Eigen::Matrix<double, 6, 6> Pp = pred->poseCovariance(), Pn = n.poseCovariance();
+    EXPECT_LT((Pp - Pn).norm(), 1e-12 * Pn.norm());
+    EXPECT_LT((w - Vec3(0.1, -0.2, 0.3)).norm(), 1e-12);  // zero gyro bias
+  }
+}

@@ -7,6 +7,7 @@
 #include <opencv2/imgcodecs.hpp>
 #include <tf2_eigen/tf2_eigen.h>
 
+#include <cmath>
 #include <cstdlib>
 #include <fstream>
 #include <optional>
@@ -38,6 +39,13 @@ class KeepingSink : public OutputSink {
     poses.push_back(p);
   }
   bool wantsLandmarks() const override { return false; }
+  int imu_rate_poses = 0;
+  bool imu_rate_finite = true;
+  bool wantsImuOdometry() const override { return true; }
+  void imuOdometry(const nav_msgs::Odometry& o) override {
+    ++imu_rate_poses;
+    imu_rate_finite = imu_rate_finite && std::isfinite(o.pose.pose.position.x) && std::isfinite(o.pose.covariance[0]);
+  }
   void landmarks(const std::vector<LandmarkOutput>&, const ros::Time&) override {}
   void status(const vi_ekf_slam::FilterStatus& s) override { time_offsets.push_back(s.time_offset_s); }
   void event(const std::string& text) override { events.push_back(text); }
@@ -129,6 +137,9 @@ TEST(RealHandheld, First15SecondsTrackWithTheDefaultsAndFindTheTimeOffset) {
   expectTracked(*r, "defaults");
   EXPECT_LT(r->sfm.position_rmse_m, 0.082);
   EXPECT_NEAR(r->sink.time_offsets.back(), -0.047, 0.005);  // from 0: the image stamps are 45-49 ms late
+  // odom_imu: a pose per IMU sample (219 Hz against 20 Hz images) once initialized.
+  EXPECT_GT(r->sink.imu_rate_poses, 8 * static_cast<int>(r->sink.poses.size()));
+  EXPECT_TRUE(r->sink.imu_rate_finite);
   // The published angular velocity is one gyro sample: its variance is the white noise at the
   // IMU's own rate (219 Hz here, not an assumed 200 Hz) plus the gyro bias's (at most its prior).
   const double w_var = r->gyro_noise_density * r->gyro_noise_density * r->imu_rate_hz;

@@ -87,6 +87,10 @@ class EkfSlam {
   void composeNow();
 
   NavState navState() const { return vi_ekf_slam::navState(state_); }
+  /// The state propagated through the IMU samples buffered past it, to the latest one (an
+  /// IMU-rate pose between images, with its covariance; the filter is not changed), and the
+  /// bias-corrected angular rate there [rad/s]. Nothing before initialization.
+  std::optional<NavState> predictedNavState(Vec3* angular_rate = nullptr) const;
   std::vector<NavLandmark> landmarks() const { return navLandmarks(state_); }
   const FilterState& state() const { return state_; }
   FilterState& mutableState() { return state_; }
@@ -104,7 +108,9 @@ class EkfSlam {
   bool shouldCompose(int new_landmarks) const;
   /// The estimated speed exceeds zero_velocity.moving_speed_mps by two standard deviations.
   bool confidentlyMoving() const;
-  void addGapUncertainty(double dt);
+  void addGapUncertainty(FilterState& s, double dt) const;
+  /// Propagates s to t through the buffered IMU samples (they must reach t).
+  void integrateImu(FilterState& s, double t, Vec3* last_gyro) const;
 
   EkfSlamConfig config_;
   CameraModel camera_;

@@ -53,6 +53,9 @@ class OutputSink {
   virtual void odometry(const nav_msgs::Odometry& odom) = 0;
   virtual bool wantsLandmarks() const { return true; }
   virtual void landmarks(const std::vector<LandmarkOutput>& landmarks, const ros::Time& stamp) = 0;
+  /// The IMU-rate pose (propagated from the last update at every IMU sample), when wanted.
+  virtual bool wantsImuOdometry() const { return false; }
+  virtual void imuOdometry(const nav_msgs::Odometry& /*odom*/) {}
   virtual bool wantsTracksImage() const { return false; }
   virtual void tracksImage(const std_msgs::Header& /*header*/, const cv::Mat& /*bgr*/) {}
   virtual void status(const vi_ekf_slam::FilterStatus& status) = 0;
@@ -98,6 +101,9 @@ class EkfSlamProcessor {
   };
 
   bool cameraReady(const std::string& image_frame);
+  /// odom_imu: the filter's state propagated to the latest IMU sample (when the sink wants it).
+  void publishImuRatePose();
+  double angularRateVariance() const;  ///< of one published angular-rate sample [rad^2/s^2]
   void tryInitialize(double t_now);
   /// While not initialized and not at rest: tracks the image and tries the dynamic initializer.
   void tryDynamicInitialize(PendingImage& img);

@@ -29,6 +29,8 @@ class EkfSlamRos : public OutputSink {
   // OutputSink: publish.
   void odometry(const nav_msgs::Odometry& odom) override;
   bool wantsLandmarks() const override { return landmarks_pub_.getNumSubscribers() > 0; }
+  bool wantsImuOdometry() const override { return odom_imu_pub_.getNumSubscribers() > 0; }
+  void imuOdometry(const nav_msgs::Odometry& odom) override { odom_imu_pub_.publish(odom); }
   void landmarks(const std::vector<LandmarkOutput>& landmarks, const ros::Time& stamp) override;
   bool wantsTracksImage() const override { return tracks_pub_.getNumSubscribers() > 0; }
   void tracksImage(const std_msgs::Header& header, const cv::Mat& bgr) override;
@@ -53,7 +55,7 @@ class EkfSlamRos : public OutputSink {
   image_transport::Subscriber image_sub_;
   image_transport::Publisher tracks_pub_;
   ros::Subscriber imu_sub_, info_sub_;
-  ros::Publisher odom_pub_, path_pub_, landmarks_pub_, status_pub_, events_pub_;
+  ros::Publisher odom_pub_, odom_imu_pub_, path_pub_, landmarks_pub_, status_pub_, events_pub_;
   ros::ServiceServer reset_srv_;
   ros::Timer diag_timer_;
   nav_msgs::Path path_;
