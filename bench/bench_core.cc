@@ -4,6 +4,7 @@
 
 #include "bench_fixtures.h"
 #include "vi_ekf_slam/core/allocator_tuning.h"
+#include "vi_ekf_slam/core/ekf_slam.h"
 #include "vi_ekf_slam/core/frame_change.h"
 #include "vi_ekf_slam/core/imu_propagation.h"
 
@@ -45,6 +46,18 @@ void BM_ImuIntervalWithFlush(::benchmark::State& st) {
   }
 }
 BENCHMARK(BM_ImuIntervalWithFlush)->Apply(mapSizes);
+
+// The odom_imu latency: the pose published at an IMU sample is the last update's state propagated
+// (motion state alone) through the samples since; the worst case is the end of a camera interval
+// (7 samples at 200 Hz / 28 Hz). Independent of the map size by construction.
+void BM_ImuRatePose(::benchmark::State& st) {
+  EkfSlamConfig cfg;
+  EkfSlam filter(cfg, sim::paperCamera(), CameraExtrinsics());
+  filter.initialize(NavState());
+  for (int k = 0; k <= 7; ++k) filter.addImu({0.005 * k, kWm, kAm});
+  for (auto _ : st) benchmark::DoNotOptimize(filter.predictedNavState());
+}
+BENCHMARK(BM_ImuRatePose)->Unit(::benchmark::kMicrosecond);
 
 // One image update with 30 observations (stacked, gated, Joseph form), on a fresh copy.
 void BM_Update30(::benchmark::State& st) {
