@@ -107,34 +107,39 @@ UpdateResult ekfUpdate(FilterState& state, const std::vector<FeatureObservation>
     std::vector<AcceptedObservation> acc;
   };
   std::optional<Iterate> kept;
+  // Predicts every observation at x_0 [+] dd: their Jacobians and residuals into obs, and the
+  // observations' cost |z - h|^2_R. False if one can no longer be predicted.
+  auto relinearizeAt = [&](const Eigen::VectorXd& dd, std::vector<AcceptedObservation>* obs, double* cost) {
+    restorePrior();
+    state.boxplus(dd);
+    *cost = 0.0;
+    for (auto& a : *obs) {
+      const auto li = state.findLandmark(a.id);
+      Eigen::Vector2d uv;
+      if (!li || !predictObservation(state.x, state.landmark(*li), camera, T_b_c, &uv, &a.J)) return false;
+      if (!predictImageVelocity(state.x, state.landmark(*li), camera, T_b_c, omega_b, &a.H_td)) a.H_td.setZero();
+      a.residual = a.measured - uv - a.H_td * rowTime(a.measured.y());
+      *cost += a.residual.squaredNorm() / r_var;
+    }
+    return true;
+  };
+  auto revertToKept = [&] {
+    d = kept->d;
+    PHt = kept->PHt;
+    S = kept->S;
+    K = kept->K;
+    acc = kept->acc;
+  };
   for (int it = 0; it < iterations; ++it) {
     if (it > 0) {
       // Relinearize at x_i; an observation that can no longer be predicted ends the iterations
       // at the previous iterate (whose K is kept).
-      restorePrior();
-      state.boxplus(d);
-      bool ok = true;
       std::vector<AcceptedObservation> next = acc;
       double meas_cost = 0.0;
-      for (auto& a : next) {
-        const auto li = state.findLandmark(a.id);
-        Eigen::Vector2d uv;
-        if (!li || !predictObservation(state.x, state.landmark(*li), camera, T_b_c, &uv, &a.J)) {
-          ok = false;
-          break;
-        }
-        if (!predictImageVelocity(state.x, state.landmark(*li), camera, T_b_c, omega_b, &a.H_td)) a.H_td.setZero();
-        a.residual = a.measured - uv - a.H_td * rowTime(a.measured.y());
-        meas_cost += a.residual.squaredNorm() / r_var;
-      }
-      if (!ok) break;
+      if (!relinearizeAt(d, &next, &meas_cost)) break;
       const double cost = prior_cost + meas_cost;
       if (kept && !(cost < accepted_cost)) {  // worse than the last iterate: keep that one
-        d = kept->d;
-        PHt = kept->PHt;
-        S = kept->S;
-        K = kept->K;
-        acc = kept->acc;
+        revertToKept();
         break;
       }
       accepted_cost = cost;
@@ -178,28 +183,9 @@ UpdateResult ekfUpdate(FilterState& state, const std::vector<FeatureObservation>
     if (change < kIterationTolerance) break;
     if (it + 1 == iterations && kept) {
       // The last iterate, too, only if it lowers the cost.
-      restorePrior();
-      state.boxplus(d);
+      std::vector<AcceptedObservation> last = acc;
       double meas_cost = 0.0;
-      bool ok = true;
-      for (const auto& a : acc) {
-        const auto li = state.findLandmark(a.id);
-        Eigen::Vector2d uv;
-        ObservationJacobians J;
-        if (!li || !predictObservation(state.x, state.landmark(*li), camera, T_b_c, &uv, &J)) {
-          ok = false;
-          break;
-        }
-        Eigen::Vector2d H_td = Eigen::Vector2d::Zero();
-        if (!predictImageVelocity(state.x, state.landmark(*li), camera, T_b_c, omega_b, &H_td)) H_td.setZero();
-        meas_cost += (a.measured - uv - H_td * rowTime(a.measured.y())).squaredNorm() / r_var;
-      }
-      if (!ok || !(prior_cost + meas_cost < accepted_cost)) {
-        d = kept->d;
-        PHt = kept->PHt;
-        S = kept->S;
-        K = kept->K;
-      }
+      if (!relinearizeAt(d, &last, &meas_cost) || !(prior_cost + meas_cost < accepted_cost)) revertToKept();
     }
   }
   restorePrior();
