@@ -18,7 +18,7 @@ PKGS=(
   python3-dynamic-reconfigure libdynamic-reconfigure-config-init-mutex-dev
   libstd-srvs-dev libdiagnostic-updater-dev nlohmann-json3-dev libboost-program-options-dev
   ros-sensor-msgs ros-nav-msgs ros-geometry-msgs ros-visualization-msgs ros-std-srvs
-  python3-sensor-msgs python3-nav-msgs python3-geometry-msgs python3-std-msgs python3-tf2-msgs
+  python3-sensor-msgs python3-nav-msgs python3-geometry-msgs python3-std-msgs python3-tf2-msgs python3-tf2-ros
   python3-diagnostic-msgs python3-rostopic python3-rosnode python3-rospy python3-rosservice
   # tools, plots, screenshots, lint
   python3-opencv python3-numpy python3-matplotlib python3-yaml

@@ -452,6 +452,9 @@ int main(int argc, char** argv) {
       std::cerr << "impossible parameter values:\n" << err;
       return 1;
     }
+    // The evaluation is of the filter in its own world, which restarts at every reset (and so does
+    // the evaluated segment); the node's odom frame would join the segments.
+    params.node.publish_tf = glue::TfMode::kWorld;
     const std::string name = toString(params.filter.mechanization);
     RecordingSink sink;
     tf2::BufferCore tf;

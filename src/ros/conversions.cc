@@ -147,25 +147,11 @@ nav_msgs::Odometry toOdometry(const NavState& nav, const Eigen::Vector3d& w_b, d
   return o;
 }
 
-geometry_msgs::TransformStamped toTransform(const NavState& nav, const ros::Time& stamp, const std::string& world_frame,
-                                            const std::string& body_frame) {
-  geometry_msgs::TransformStamped t;
-  t.header.stamp = stamp;
-  t.header.frame_id = world_frame;
-  t.child_frame_id = body_frame;
-  Vec3 p_w;
-  Quat q_w_b;
-  navToZUpWorld(nav.p_n_b, nav.q_n_b, &p_w, &q_w_b);
-  tf2::toMsg(p_w, t.transform.translation);
-  t.transform.rotation = tf2::toMsg(q_w_b);
-  return t;
-}
-
 sensor_msgs::PointCloud2 toPointCloud(const std::vector<LandmarkOutput>& lms, const ros::Time& stamp,
-                                      const std::string& world_frame) {
+                                      const std::string& frame, const Eigen::Isometry3d& T_frame_world) {
   sensor_msgs::PointCloud2 c;
   c.header.stamp = stamp;
-  c.header.frame_id = world_frame;
+  c.header.frame_id = frame;
   c.height = 1;
   sensor_msgs::PointCloud2Modifier mod(c);
   mod.setPointCloud2Fields(8, "x", 1, sensor_msgs::PointField::FLOAT32, "y", 1, sensor_msgs::PointField::FLOAT32, "z",
@@ -185,7 +171,7 @@ sensor_msgs::PointCloud2 toPointCloud(const std::vector<LandmarkOutput>& lms, co
   const Quat q_w_n = zUpWorldFromNav();
   for (const LandmarkOutput* lo : finite) {
     const NavLandmark& l = lo->landmark;
-    const Vec3 p = q_w_n * l.p_n_l;
+    const Vec3 p = T_frame_world * (q_w_n * l.p_n_l);
     *x = static_cast<float>(p.x());
     *y = static_cast<float>(p.y());
     *z = static_cast<float>(p.z());

@@ -13,7 +13,11 @@
 namespace vi_ekf_slam::glue {
 
 EkfSlamProcessor::EkfSlamProcessor(const NodeParams& params, OutputSink& sink, const tf2::BufferCore* tf)
-    : params_(params), sink_(sink), tf_(tf), static_init_(params.static_init) {
+    : params_(params),
+      sink_(sink),
+      tf_(tf),
+      static_init_(params.static_init),
+      frames_(params.node.publish_tf, params.node.world_frame, params.node.odom_frame, params.node.base_frame) {
   if (params_.node.tune_allocator) tuneAllocatorForLargeBuffers();
   body_frame_ = params_.node.body_frame;  // "": from the first IMU message
   if (params_.node.extrinsic_source == "parameters") {
@@ -56,6 +60,7 @@ void EkfSlamProcessor::reset(const std::string& reason) {
   births_.clear();
   prev_q_n_b_.reset();
   last_imu_t_ = last_image_t_ = last_processed_t_ = -1e300;
+  frames_.filterRestarted();
   ++counters_.resets;
   sink_.event("reset: " + reason);
 }
@@ -97,6 +102,7 @@ void EkfSlamProcessor::cameraInfo(const sensor_msgs::CameraInfo& msg) {
     filter_.reset();
     tracker_.reset();
     births_.clear();
+    frames_.filterRestarted();
     ++counters_.resets;
     sink_.event("reset: camera calibration changed");
   }
@@ -185,6 +191,7 @@ void EkfSlamProcessor::imu(const sensor_msgs::Imu& msg) {
   if (d->timestamp <= last_imu_t_) {
     if (last_imu_t_ - d->timestamp > params_.node.time_jump_reset_s) {
       reset("IMU time jumped back by " + std::to_string(last_imu_t_ - d->timestamp) + " s");
+      frames_.forget();  // a new recording (or a looped bag): odom starts over too
     } else {
       ++counters_.imu_stale;
       reportProblem("IMU sample not newer than the previous one dropped");
@@ -224,6 +231,7 @@ void EkfSlamProcessor::image(const sensor_msgs::Image& msg) {
   if (t <= last_image_t_) {
     if (last_image_t_ - t > params_.node.time_jump_reset_s) {
       reset("image time jumped back by " + std::to_string(last_image_t_ - t) + " s");
+      frames_.forget();
     } else {
       ++counters_.images_stale;
       reportProblem("image not newer than the previous one dropped");
@@ -231,7 +239,7 @@ void EkfSlamProcessor::image(const sensor_msgs::Image& msg) {
     }
   }
   last_image_t_ = t;
-  PendingImage img{t, msg.header.stamp, cv::Mat()};
+  PendingImage img{t, msg.header, cv::Mat()};
   const std::string err = toMono8(msg, &img.mono);
   if (!err.empty()) {
     ++counters_.images_bad_encoding;
@@ -373,7 +381,8 @@ void EkfSlamProcessor::processImage(PendingImage& img) {
     return;
   }
   const NavState nav = filter_->navState();
-  if (!nav.p_n_b.allFinite() || !nav.q_n_b.coeffs().allFinite() || !nav.cov.allFinite()) {
+  if (!nav.p_n_b.allFinite() || !nav.v_n_b.allFinite() || !nav.q_n_b.coeffs().allFinite() || !nav.b_g.allFinite() ||
+      !nav.b_a.allFinite() || !nav.cov.allFinite()) {
     reset("the filter state became non-finite");
     return;
   }
@@ -383,25 +392,19 @@ void EkfSlamProcessor::processImage(PendingImage& img) {
 
 void EkfSlamProcessor::output(const PendingImage& img, const CameraFrame& frame, const FrameResult& r) {
   const NavState nav = filter_->navState();
-  const NodeOptions& o = params_.node;
-  const double w_var = angularRateVariance();
   // Every output is stamped on the IMU clock, at the time of the state it carries (the image
   // stamp plus the estimated camera-IMU time offset).
   ros::Time stamp;
   stamp.fromSec(nav.timestamp);
-  const nav_msgs::Odometry odom = toOdometry(nav, last_gyro_ - nav.b_g, w_var, stamp, o.world_frame, body_frame_);
-  if (!allFinite(odom)) {
-    reset("non-finite odometry");
-    return;
-  }
-  sink_.odometry(odom);
+  const std::optional<nav_msgs::Odometry> odom = odometryOf(nav, last_gyro_ - nav.b_g);
+  if (odom) sink_.odometry(*odom);
   for (auto id : r.removed_ids) births_.erase(id);
   for (auto id : r.new_ids) {
     for (const auto& f : frame.features) {
       if (f.id == id) births_[id] = {img.t, f.uv};
     }
   }
-  if (sink_.wantsLandmarks()) {
+  if (odom && sink_.wantsLandmarks()) {
     std::vector<LandmarkOutput> out;
     for (const auto& l : filter_->landmarks()) {
       LandmarkOutput lo;
@@ -415,13 +418,11 @@ void EkfSlamProcessor::output(const PendingImage& img, const CameraFrame& frame,
     }
     sink_.landmarks(out, stamp);
   }
-  if (sink_.wantsTracksImage()) {
-    std_msgs::Header header = odom.header;
-    header.stamp = img.stamp;  // the image's own stamp, so it overlays its source image
-    sink_.tracksImage(header, tracker_->drawTracks(img.mono));
-  }
+  // The image's own header (stamp and camera frame), so that it overlays its source image.
+  if (sink_.wantsTracksImage()) sink_.tracksImage(img.header, tracker_->drawTracks(img.mono));
   vi_ekf_slam::FilterStatus s;
-  s.header = odom.header;
+  s.header.stamp = stamp;
+  s.header.frame_id = frames_.fixedFrame();
   s.mechanization = toString(filter_->mechanization());
   s.landmark_init = toString(params_.filter.landmark_init);
   s.initialized = filter_->initialized();
@@ -467,11 +468,26 @@ void EkfSlamProcessor::publishImuRatePose() {
   Vec3 w_b;
   const std::optional<NavState> nav = filter_->predictedNavState(&w_b);
   if (!nav) return;
+  if (const std::optional<nav_msgs::Odometry> odom = odometryOf(*nav, w_b)) sink_.imuOdometry(*odom);
+}
+
+std::optional<nav_msgs::Odometry> EkfSlamProcessor::odometryOf(const NavState& nav, const Vec3& w_b) {
+  const std::string waiting = frames_.prepare(body_frame_, tf_);
+  if (!waiting.empty()) {
+    reportProblem(waiting);
+    return std::nullopt;
+  }
   ros::Time stamp;
-  stamp.fromSec(nav->timestamp);
-  const nav_msgs::Odometry odom =
-      toOdometry(*nav, w_b, angularRateVariance(), stamp, params_.node.world_frame, body_frame_);
-  if (allFinite(odom)) sink_.imuOdometry(odom);
+  stamp.fromSec(nav.timestamp);
+  const nav_msgs::Odometry imu =
+      toOdometry(nav, w_b, angularRateVariance(), stamp, params_.node.world_frame, body_frame_);
+  // The state was checked finite (processImage): this only guards what is derived from it.
+  const nav_msgs::Odometry out = allFinite(imu) ? frames_.odometry(imu) : imu;
+  if (!allFinite(out)) {
+    reportProblem("non-finite odometry not published");
+    return std::nullopt;
+  }
+  return out;
 }
 
 }  // namespace vi_ekf_slam::glue

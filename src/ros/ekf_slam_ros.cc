@@ -13,8 +13,18 @@ EkfSlamRos::EkfSlamRos(ros::NodeHandle nh, ros::NodeHandle pnh) : nh_(nh), pnh_(
   const std::string err = loadParams(NodeHandleParams(pnh_), &params);
   if (!err.empty()) throw std::invalid_argument("vi_ekf_slam: impossible parameter values:\n" + err);
   ROS_INFO_STREAM(describeParams(params));
-  if (params.node.extrinsic_source == "tf")
+  // TF is read for the camera-IMU extrinsic and for base_frame <- IMU.
+  if (params.node.extrinsic_source == "tf" || !params.node.base_frame.empty())
     tf_listener_ = std::make_unique<tf2_ros::TransformListener>(tf_buffer_, nh_);
+  if (params.node.publish_tf == TfMode::kOdom && !params.node.map_frame.empty()) {
+    // No global localizer: map and odom coincide (REP-105).
+    geometry_msgs::TransformStamped t;
+    t.header.stamp = ros::Time::now();
+    t.header.frame_id = params.node.map_frame;
+    t.child_frame_id = params.node.odom_frame;
+    t.transform.rotation.w = 1.0;
+    static_broadcaster_.sendTransform(t);
+  }
   processor_ = std::make_unique<EkfSlamProcessor>(params, *this, &tf_buffer_);
 
   updater_.setHardwareID("vi_ekf_slam");
@@ -96,7 +106,7 @@ image_transport::TransportHints EkfSlamRos::imageTransportHints() const {
 void EkfSlamRos::odometry(const nav_msgs::Odometry& odom) {
   const NodeOptions& o = processor_->params().node;
   odom_pub_.publish(odom);
-  if (o.publish_tf) {
+  if (o.publish_tf != TfMode::kNone) {  // odom_frame -> base_frame, or world_frame -> IMU frame
     geometry_msgs::TransformStamped t;
     t.header = odom.header;
     t.child_frame_id = odom.child_frame_id;
@@ -118,7 +128,8 @@ void EkfSlamRos::odometry(const nav_msgs::Odometry& odom) {
 }
 
 void EkfSlamRos::landmarks(const std::vector<LandmarkOutput>& lms, const ros::Time& stamp) {
-  landmarks_pub_.publish(toPointCloud(lms, stamp, processor_->params().node.world_frame));
+  const OutputFrames& frames = processor_->outputFrames();
+  landmarks_pub_.publish(toPointCloud(lms, stamp, frames.fixedFrame(), frames.fixedFromWorld()));
 }
 
 void EkfSlamRos::tracksImage(const std_msgs::Header& header, const cv::Mat& bgr) {

@@ -316,9 +316,18 @@ std::string loadParams(const ParamSource& source, NodeParams* out) {
   di.gravity_mps2 = f.gravity_mps2;
   di.pixel_noise_px = f.update.pixel_noise_px;
   NodeOptions& n = p.node;
+  std::string publish_tf = toString(n.publish_tf);
+  rd("publish_tf", publish_tf);
+  if (auto m = tfModeFromString(publish_tf)) {
+    n.publish_tf = *m;
+  } else {
+    err << "publish_tf must be 'odom', 'none' or 'world' (got '" << publish_tf << "')\n";
+  }
+  rd("odom_frame", n.odom_frame);
+  rd("base_frame", n.base_frame);
+  rd("map_frame", n.map_frame);
   rd("world_frame", n.world_frame);
   rd("body_frame", n.body_frame);
-  rd("publish_tf", n.publish_tf);
   rd("tune_allocator", n.tune_allocator);
   rd("camera_calibration_file", n.camera_calibration_file);
   rd("extrinsic_source", n.extrinsic_source);
@@ -331,6 +340,11 @@ std::string loadParams(const ParamSource& source, NodeParams* out) {
   err << fromReconfigure(c, &p);
   if (n.world_frame.empty()) err << "world_frame must not be empty\n";
   if (n.world_frame == n.body_frame) err << "world_frame and body_frame must differ\n";
+  if (n.odom_frame.empty()) err << "odom_frame must not be empty\n";
+  if (n.odom_frame == n.base_frame || n.odom_frame == n.body_frame) {
+    err << "odom_frame must differ from base_frame and body_frame\n";
+  }
+  if (!n.map_frame.empty() && n.map_frame == n.odom_frame) err << "map_frame and odom_frame must differ\n";
   if (n.extrinsic_source != "tf" && n.extrinsic_source != "parameters") {
     err << "extrinsic_source must be 'tf' or 'parameters' (got '" << n.extrinsic_source << "')\n";
   }
@@ -360,9 +374,11 @@ std::string describeParams(const NodeParams& p) {
   const TrackerParams& t = p.tracker;
   const NodeOptions& n = p.node;
   s << "vi_ekf_slam parameters:\n"
-    << "  frames: world_frame=" << n.world_frame
+    << "  frames: publish_tf=" << toString(n.publish_tf) << " odom_frame=" << n.odom_frame
+    << " base_frame=" << (n.base_frame.empty() ? "(the IMU frame)" : n.base_frame)
+    << " map_frame=" << (n.map_frame.empty() ? "(none)" : n.map_frame) << " world_frame=" << n.world_frame
     << " body_frame=" << (n.body_frame.empty() ? "(the IMU messages' frame_id)" : n.body_frame)
-    << " publish_tf=" << n.publish_tf << " tune_allocator=" << n.tune_allocator << "\n"
+    << " tune_allocator=" << n.tune_allocator << "\n"
     << "  mechanization=" << toString(f.mechanization) << " composition_trigger=" << toString(f.composition_trigger)
     << " composition_new_landmarks=" << f.composition_new_landmarks << "\n"
     << "  landmark_init=" << toString(f.landmark_init) << " landmark_depth_m=" << f.landmark_depth_m

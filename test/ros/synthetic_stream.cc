@@ -1,7 +1,7 @@
 // Test fixture: publishes a simulated pedestrian rig in real time, like its drivers would:
-// /imu (sensor_msgs/Imu, 200 Hz, frame imu), /camera/image_raw (rendered hallway, 28 Hz, frame
-// camera), /camera/camera_info, /tf_static (imu <- camera) and /ground_truth/pose (body in the
-// z-up world). ~fault injects one kind of bad input:
+// /imu (sensor_msgs/Imu, 200 Hz, frame ~imu_frame, default imu), /camera/image_raw (rendered
+// hallway, 28 Hz, frame ~camera_frame, default camera), /camera/camera_info, /tf_static (imu <-
+// camera) and /ground_truth/pose (the IMU in the z-up world). ~fault injects one kind of bad input:
 //   none | nan_imu | imu_repeat | image_repeat | time_jump | imu_gap | image_before_imu |
 //   encoding_cycle | encoding:<enc> | camera_info_missing | camera_info_zero |
 //   compressed (PNG on /camera/image_raw/compressed instead of raw images) |
@@ -32,10 +32,9 @@ using namespace vi_ekf_slam;
 
 namespace {
 
-sensor_msgs::CameraInfo cameraInfo(const CameraModel& cam, const ros::Time& stamp, bool zero) {
+sensor_msgs::CameraInfo cameraInfo(const CameraModel& cam, const std_msgs::Header& header, bool zero) {
   sensor_msgs::CameraInfo ci;
-  ci.header.stamp = stamp;
-  ci.header.frame_id = "camera";
+  ci.header = header;
   ci.width = static_cast<uint32_t>(cam.width());
   ci.height = static_cast<uint32_t>(cam.height());
   if (zero) return ci;  // all-zero K, as some drivers publish before calibration
@@ -72,8 +71,10 @@ int main(int argc, char** argv) {
   ros::init(argc, argv, "synthetic_stream");
   ros::NodeHandle nh, pnh("~");
   double duration = 8.0, standing = 2.0;
-  std::string fault = "none";
+  std::string fault = "none", imu_frame = "imu", camera_frame = "camera";
   int seed = 1;
+  pnh.param("imu_frame", imu_frame, imu_frame);
+  pnh.param("camera_frame", camera_frame, camera_frame);
   pnh.param("duration_s", duration, duration);
   pnh.param("standing_s", standing, standing);
   pnh.param("fault", fault, fault);
@@ -108,8 +109,8 @@ int main(int argc, char** argv) {
   tf2_ros::StaticTransformBroadcaster tf_static;
   geometry_msgs::TransformStamped T;
   T.header.stamp = ros::Time::now();
-  T.header.frame_id = "imu";
-  T.child_frame_id = "camera";
+  T.header.frame_id = imu_frame;
+  T.child_frame_id = camera_frame;
   tf2::toMsg(sc.T_b_c.p_b_c, T.transform.translation);
   T.transform.rotation = tf2::toMsg(Quat(sc.T_b_c.R_b_c));
   tf_static.sendTransform(T);
@@ -141,7 +142,7 @@ int main(int argc, char** argv) {
       if (fault == "image_before_imu" && t < 1.5) continue;
       sensor_msgs::Imu m;
       m.header.stamp = stamp;
-      m.header.frame_id = "imu";
+      m.header.frame_id = imu_frame;
       m.orientation_covariance[0] = -1;  // no orientation (REP-145)
       m.angular_velocity.x = d.wm.x();
       m.angular_velocity.y = d.wm.y();
@@ -163,7 +164,7 @@ int main(int argc, char** argv) {
       if (fault == "image_dropout" && t >= 4.0 && t < 6.0) continue;
       std_msgs::Header h;
       h.stamp = stamp;
-      h.frame_id = "camera";
+      h.frame_id = camera_frame;
       std::string enc = "mono8";
       if (fault == "encoding_cycle") enc = cycle[k % 5];
       if (fault.rfind("encoding:", 0) == 0) enc = fault.substr(9);
@@ -172,7 +173,7 @@ int main(int argc, char** argv) {
       const size_t stale = static_cast<size_t>(1.5 * sc.cam.rate_hz);
       if (fault == "outlier_burst" && t >= 4.0 && t < 4.5 && k >= stale) frame = frames[k - stale];
       sensor_msgs::ImagePtr img = encode(frame, enc, h);
-      if (fault != "camera_info_missing") info_pub.publish(cameraInfo(sc.camera, stamp, fault == "camera_info_zero"));
+      if (fault != "camera_info_missing") info_pub.publish(cameraInfo(sc.camera, h, fault == "camera_info_zero"));
       if (fault == "image_repeat" && t >= 3.0 && t < 3.5 && last_img && k % 3 == 0) img_pub.publish(last_img);
       if (fault == "compressed") {
         sensor_msgs::CompressedImage c;

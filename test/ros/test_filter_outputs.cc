@@ -12,6 +12,8 @@
 //   min_resets          minimum "resets" reported by the status
 //   call_reset_at_s     call the reset service this long after the first odometry [s]; <0: never
 //   max_reinit_s        after that reset, odometry must be back within this much stream time [s]; 0: not checked
+//   max_reset_step_m    largest position step between consecutive odometry messages from just before
+//                       that reset on: odom stays continuous (REP-105) [m]; 0: not checked
 //   switch_at_s         switch the mechanization this long after the first odometry [s]; <0: never
 //   switch_to           the mechanization to switch to
 #include <diagnostic_msgs/DiagnosticArray.h>
@@ -77,6 +79,8 @@ TEST(FilterNode, BehavesOnThisInputStream) {
   pnh.param("min_resets", min_resets, min_resets);
   pnh.param("call_reset_at_s", reset_at, reset_at);
   pnh.param("max_reinit_s", max_reinit, max_reinit);
+  double max_reset_step = 0.0;
+  pnh.param("max_reset_step_m", max_reset_step, max_reset_step);
   pnh.param("switch_at_s", switch_at, switch_at);
   pnh.param("switch_to", switch_to, switch_to);
 
@@ -280,6 +284,16 @@ TEST(FilterNode, BehavesOnThisInputStream) {
       std::printf("odometry back %.2f s after the reset\n", gap);
       ::testing::Test::RecordProperty("reinit_ms", static_cast<int>(1e3 * gap));
       EXPECT_LT(gap, max_reinit) << "no odometry for " << gap << " s after the reset";
+    }
+    if (max_reset_step > 0.0) {
+      // The filter starts over in a new world; odom places it where the last pose was.
+      double step = 0.0;
+      for (size_t i = 1; i < rec.odom.size(); ++i) {
+        if (rec.odom[i].header.stamp.toSec() < reset_stamp - 0.5) continue;
+        step = std::max(step, (pos(rec.odom[i].pose.pose.position) - pos(rec.odom[i - 1].pose.pose.position)).norm());
+      }
+      std::printf("largest odometry step across the reset %.3f m\n", step);
+      EXPECT_LT(step, max_reset_step) << "odom jumped at the reset";
     }
   }
   if (switch_at >= 0) {

@@ -40,16 +40,13 @@ CameraExtrinsics extrinsicsFromTransform(const geometry_msgs::Transform& t);
 nav_msgs::Odometry toOdometry(const NavState& nav, const Eigen::Vector3d& w_b, double w_var, const ros::Time& stamp,
                               const std::string& world_frame, const std::string& body_frame);
 
-/// TF world -> body.
-geometry_msgs::TransformStamped toTransform(const NavState& nav, const ros::Time& stamp, const std::string& world_frame,
-                                            const std::string& body_frame);
-
-/// Landmarks in the world frame as a cloud with fields x y z (float32), id (uint32), sigma
-/// (float32, square root of the largest eigenvalue of the 3x3 covariance [m]), and where the
-/// landmark's track started: birth_time (float64 [s]), birth_u, birth_v (float32 [px]).
+/// Landmarks in `frame` (the ENU-style world is T_frame_world in it) as a cloud with fields x y z
+/// (float32), id (uint32), sigma (float32, square root of the largest eigenvalue of the 3x3
+/// covariance [m]), and where the landmark's track started: birth_time (float64 [s]), birth_u,
+/// birth_v (float32 [px]).
 struct LandmarkOutput;
 sensor_msgs::PointCloud2 toPointCloud(const std::vector<LandmarkOutput>& landmarks, const ros::Time& stamp,
-                                      const std::string& world_frame);
+                                      const std::string& frame, const Eigen::Isometry3d& T_frame_world);
 
 /// True if every number of the pose, twist and covariances is finite.
 bool allFinite(const nav_msgs::Odometry& odom);

@@ -20,6 +20,7 @@
 #include "vi_ekf_slam/core/feature_tracker.h"
 #include "vi_ekf_slam/core/dynamic_initializer.h"
 #include "vi_ekf_slam/core/static_initializer.h"
+#include "vi_ekf_slam/ros/output_frames.h"
 #include "vi_ekf_slam/ros/params.h"
 #include <nav_msgs/Odometry.h>
 
@@ -81,6 +82,8 @@ class EkfSlamProcessor {
   const std::string& lastProblem() const { return last_problem_; }
   /// The IMU frame: body_frame, or the frame_id of the first IMU message ("" before it).
   const std::string& bodyFrame() const { return body_frame_; }
+  /// The frames of the outputs (odom or world) and the filter's world in them.
+  const OutputFrames& outputFrames() const { return frames_; }
   /// Why the filter was last found lost (empty if never).
   const std::string& lastLost() const { return last_lost_; }
   const EkfSlam* filter() const { return filter_.get(); }
@@ -92,7 +95,7 @@ class EkfSlamProcessor {
  private:
   struct PendingImage {
     double t;
-    ros::Time stamp;
+    std_msgs::Header header;  ///< the image's own (camera clock, camera frame)
     cv::Mat mono;
   };
   struct Birth {
@@ -112,6 +115,9 @@ class EkfSlamProcessor {
   /// Shrinks img.mono to the tracking resolution (for the tracks image too) and tracks it.
   CameraFrame trackImage(PendingImage& img, const std::optional<Eigen::Matrix3d>& R_cur_prev);
   void output(const PendingImage& img, const CameraFrame& frame, const FrameResult& r);
+  /// The published odometry of the IMU state `nav` (in the output frames), or nullopt when the
+  /// base frame's transform is not known yet or a number is not finite.
+  std::optional<nav_msgs::Odometry> odometryOf(const NavState& nav, const Vec3& w_b);
   void reportProblem(const std::string& what);
 
   NodeParams params_;
@@ -137,6 +143,7 @@ class EkfSlamProcessor {
   double last_update_ms_ = 0.0, last_tracker_ms_ = 0.0, total_processing_ms_ = 0.0;
   std::string last_problem_, last_lost_;
   std::string body_frame_;  ///< see bodyFrame()
+  OutputFrames frames_;
 };
 
 }  // namespace vi_ekf_slam::glue

@@ -14,6 +14,7 @@
 #include <std_srvs/Trigger.h>
 #include <tf2_ros/buffer.h>
 #include <tf2_ros/transform_broadcaster.h>
+#include <tf2_ros/static_transform_broadcaster.h>
 #include <tf2_ros/transform_listener.h>
 
 #include "vi_ekf_slam/EkfSlamReconfigureConfig.h"
@@ -50,6 +51,7 @@ class EkfSlamRos : public OutputSink {
   tf2_ros::Buffer tf_buffer_;
   std::unique_ptr<tf2_ros::TransformListener> tf_listener_;
   tf2_ros::TransformBroadcaster tf_broadcaster_;
+  tf2_ros::StaticTransformBroadcaster static_broadcaster_;  ///< map_frame -> odom_frame
   std::unique_ptr<EkfSlamProcessor> processor_;
   image_transport::ImageTransport it_;
   image_transport::Subscriber image_sub_;

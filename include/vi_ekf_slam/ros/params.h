@@ -12,15 +12,20 @@
 #include "vi_ekf_slam/core/feature_tracker.h"
 #include "vi_ekf_slam/core/dynamic_initializer.h"
 #include "vi_ekf_slam/core/static_initializer.h"
+#include "vi_ekf_slam/ros/output_frames.h"
 
 namespace vi_ekf_slam::glue {
 
 struct NodeOptions {
-  std::string world_frame = "world";  ///< fixed frame of the outputs (z up)
-  /// The IMU/body frame, child of world_frame; "": the frame_id of the IMU messages ("imu" if
-  /// they carry none).
+  /// What the outputs are expressed in and which TF is broadcast (see output_frames.h): odom
+  /// (REP-105: odom_frame -> base_frame), none (the same frames, no TF), world (world_frame -> IMU).
+  TfMode publish_tf = TfMode::kOdom;
+  std::string odom_frame = "odom";    ///< REP-105 odom: the pose of the base is continuous in it
+  std::string base_frame;             ///< the robot's base ("": the IMU frame); base <- IMU from TF
+  std::string map_frame;              ///< if set (odom mode), map -> odom is broadcast as identity
+  std::string world_frame = "world";  ///< publish_tf world: the filter's world, z up
+  /// The IMU/body frame; "": the frame_id of the IMU messages ("imu" if they carry none).
   std::string body_frame;
-  bool publish_tf = true;
   bool tune_allocator = true;                         ///< see core/allocator_tuning.h
   std::string camera_calibration_file;                ///< ROS camera YAML used while no camera_info arrives
   std::string extrinsic_source = "tf";                ///< "tf" (body_frame <- image frame_id) or "parameters"
