@@ -16,7 +16,7 @@ DEVEL    := $(WS)/devel
 BIN      := $(DEVEL)/lib/vi_ekf_slam
 CATKIN   := cd $(WS) && catkin_make -j$(JOBS) -DCMAKE_BUILD_TYPE=Release -DDATA_DIR=$(DATA_DIR) -DCMAKE_EXPORT_COMPILE_COMMANDS=ON
 
-.PHONY: all deps workspace build test lint demo study suite initsuite bag screenshot bench soak realdata clean help
+.PHONY: all deps workspace build test lint demo study suite initsuite bag screenshot bench soak realdata params clean help
 
 BAG ?= results/bags/hallway.bag
 RVIZ ?= 0
@@ -89,6 +89,13 @@ test: build lint
 	$(CATKIN) run_tests -j1 | tail -n 200
 	@echo "================================ test summary ================================"
 	cd $(WS) && catkin_test_results build/test_results
+
+# The files generated from the parameter table (src/ros/param_table.cc): the documented YAML, the
+# dynamic_reconfigure definition and the reference. A test fails while a committed copy is stale.
+params: build
+	$(BIN)/vi_ekf_slam_params --yaml > config/vi_ekf_slam.yaml
+	$(BIN)/vi_ekf_slam_params --cfg > cfg/EkfSlam.cfg
+	$(BIN)/vi_ekf_slam_params --markdown > docs/parameters.md
 
 # The rendered hallway walk (2 s standing + 35 s walk), cached until the renderer changes.
 bag: build $(BAG)

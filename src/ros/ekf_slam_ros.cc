@@ -95,8 +95,7 @@ EkfSlamRos::EkfSlamRos(ros::NodeHandle nh, ros::NodeHandle pnh) : nh_(nh), pnh_(
 }
 
 image_transport::TransportHints EkfSlamRos::imageTransportHints() const {
-  std::string transport = "raw";
-  pnh_.param("image_transport", transport, transport);
+  std::string transport = processor_->params().node.image_transport;
   if (transport == "compressed") transport = "vi_ekf_slam_compressed";
   // The transport is chosen here; TransportHints would read ~image_transport again, so it is
   // pointed at a parameter name nobody sets and falls back to the choice above.

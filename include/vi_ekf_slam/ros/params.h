@@ -3,6 +3,7 @@
 #pragma once
 
 #include <ros/node_handle.h>
+#include <yaml-cpp/yaml.h>
 #include <map>
 #include <string>
 #include <vector>
@@ -29,6 +30,7 @@ struct NodeOptions {
   bool tune_allocator = true;                         ///< see core/allocator_tuning.h
   std::string camera_calibration_file;                ///< ROS camera YAML used while no camera_info arrives
   std::string extrinsic_source = "tf";                ///< "tf" (body_frame <- image frame_id) or "parameters"
+  std::string image_transport = "raw";                ///< "raw" or "compressed"
   std::vector<double> T_b_c = {0, 0, 0, 0, 0, 0, 1};  ///< x y z qx qy qz qw of the camera in the body [m]
   int max_image_queue = 20;                           ///< images waiting for IMU beyond this are dropped
   double time_jump_reset_s = 1.0;                     ///< a stamp this far backwards resets the filter [s]
@@ -45,11 +47,13 @@ struct NodeParams {
   NodeOptions node;
 };
 
-/// Where parameters come from: the parameter server (the node) or a YAML file (offline tools).
+/// Where parameters come from: the parameter server (the node) or YAML files (offline tools).
 /// get() returns false when the parameter exists but has another type.
 class ParamSource {
  public:
   virtual ~ParamSource() = default;
+  /// Every name set (top level), so that unknown ones are reported.
+  virtual std::vector<std::string> names() const = 0;
   virtual bool has(const std::string& name) const = 0;
   virtual bool get(const std::string& name, double& v) const = 0;
   virtual bool get(const std::string& name, int& v) const = 0;
@@ -62,6 +66,7 @@ class ParamSource {
 class NodeHandleParams : public ParamSource {
  public:
   explicit NodeHandleParams(const ros::NodeHandle& nh) : nh_(nh) {}
+  std::vector<std::string> names() const override;
   bool has(const std::string& name) const override { return nh_.hasParam(name); }
   bool get(const std::string& name, double& v) const override;
   bool get(const std::string& name, int& v) const override { return nh_.getParam(name, v); }
@@ -73,16 +78,18 @@ class NodeHandleParams : public ParamSource {
   ros::NodeHandle nh_;
 };
 
-/// A flat YAML parameter file as written in config/ (`key: value`, `[a, b]` lists, comments).
-/// Throws std::runtime_error naming the file and line when it cannot be read.
+/// A YAML parameter file as written in config/ (a map of names to scalars and lists), read with
+/// yaml-cpp. Throws std::runtime_error naming the file when it cannot be read.
 class YamlParams : public ParamSource {
  public:
   explicit YamlParams(const std::string& path);
-  void set(const std::string& name, const std::string& value) { values_[name] = value; }
+  /// Sets one value, written as in YAML (`1.5`, `true`, `[0, 1]`, `name`).
+  void set(const std::string& name, const std::string& value);
   /// Takes every value of `other` (a rig file on top of the defaults).
   void overlay(const YamlParams& other) {
     for (const auto& [k, v] : other.values_) values_[k] = v;
   }
+  std::vector<std::string> names() const override;
   bool has(const std::string& name) const override { return values_.count(name) > 0; }
   bool get(const std::string& name, double& v) const override;
   bool get(const std::string& name, int& v) const override;
@@ -91,13 +98,14 @@ class YamlParams : public ParamSource {
   bool get(const std::string& name, std::vector<double>& v) const override;
 
  private:
-  std::map<std::string, std::string> values_;
+  std::map<std::string, YAML::Node> values_;
 };
 
-/// Reads every parameter (defaults where unset). Returns the problems, one per line, or an
-/// empty string.
+/// Reads every parameter of the table (param_table.h; defaults where unset). Returns the problems,
+/// one per line (unknown names with the closest valid one, wrong types, values out of range,
+/// impossible combinations), or an empty string.
 std::string loadParams(const ParamSource& source, NodeParams* out);
-/// Human-readable list of every effective value with its unit.
+/// Every effective value with its unit, one per line (the startup echo).
 std::string describeParams(const NodeParams& p);
 /// Applies a dynamic_reconfigure update; returns the problems or an empty string.
 std::string applyReconfigure(const EkfSlamReconfigureConfig& c, NodeParams* p);

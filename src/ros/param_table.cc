@@ -1,0 +1,497 @@
+#include "vi_ekf_slam/ros/param_table.h"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <type_traits>
+#include <sstream>
+
+namespace vi_ekf_slam::glue {
+namespace {
+
+constexpr double kInf = std::numeric_limits<double>::infinity();
+
+std::string toString(TrackerParams::Detector d) { return d == TrackerParams::Detector::kFast ? "fast" : "shi_tomasi"; }
+
+/// The member a parameter is stored in.
+#define VI_FIELD(expr) \
+  [](NodeParams & p) -> auto& { return expr; }
+
+/// A parameter stored as is (bool, int, double, string, list of doubles).
+template <typename Ref>
+ParamSpec field(std::string name, std::string group, Ref ref, std::string unit, std::string description,
+                bool dynamic = false, double min = -kInf, double max = kInf) {
+  using T = std::remove_reference_t<decltype(ref(std::declval<NodeParams&>()))>;
+  ParamSpec s;
+  s.name = std::move(name);
+  s.group = std::move(group);
+  s.unit = std::move(unit);
+  s.description = std::move(description);
+  s.dynamic = dynamic;
+  s.min = min;
+  s.max = max;
+  // Reading through the accessor does not modify the parameters.
+  s.get = [ref](const NodeParams& p) { return ParamValue(T(ref(const_cast<NodeParams&>(p)))); };
+  s.set = [ref](NodeParams& p, const ParamValue& v) { ref(p) = std::get<T>(v); };
+  return s;
+}
+
+/// A parameter with fixed choices, stored as an enum: toString and fromString convert.
+template <typename Ref, typename E>
+ParamSpec choice(std::string name, std::string group, Ref ref, std::string description, bool dynamic,
+                 std::vector<std::pair<E, std::string>> values) {
+  ParamSpec s;
+  s.name = std::move(name);
+  s.group = std::move(group);
+  s.description = std::move(description);
+  s.dynamic = dynamic;
+  for (const auto& [e, meaning] : values) s.choices.emplace_back(toString(e), meaning);
+  s.get = [ref](const NodeParams& p) { return ParamValue(toString(ref(const_cast<NodeParams&>(p)))); };
+  s.set = [ref, values](NodeParams& p, const ParamValue& v) {
+    for (const auto& [e, meaning] : values) {
+      if (toString(e) == std::get<std::string>(v)) ref(p) = e;
+    }
+  };
+  return s;
+}
+
+/// A string parameter with fixed choices, stored as the string.
+template <typename Ref>
+ParamSpec stringChoice(std::string name, std::string group, Ref ref, std::string description,
+                       std::vector<std::pair<std::string, std::string>> values) {
+  ParamSpec s = field(std::move(name), std::move(group), ref, "", std::move(description));
+  s.choices = std::move(values);
+  return s;
+}
+
+const std::string kDynHelp = "rosrun dynamic_reconfigure dynparam set /vi_ekf_slam/filter NAME VALUE";
+
+std::vector<ParamSpec> makeTable() {
+  using M = Mechanization;
+  using C = CompositionTrigger;
+  using L = LandmarkInitMethod;
+  using D = TrackerParams::Detector;
+  const bool dyn = true;
+  return {
+      // --- frames
+      choice("publish_tf", "frames", VI_FIELD(p.node.publish_tf),
+             "which TF the node broadcasts, and the frames of its outputs", false,
+             std::vector<std::pair<TfMode, std::string>>{
+                 {TfMode::kOdom, "REP-105: odom_frame -> base_frame"},
+                 {TfMode::kNone, "the same frames, no TF (another node owns odom -> base_link)"},
+                 {TfMode::kWorld, "the filter's own world_frame -> IMU frame, restarting at every reset"}}),
+      field("odom_frame", "frames", VI_FIELD(p.node.odom_frame), "",
+            "odometry, path and landmarks are in it; the base's pose is continuous in it across resets"),
+      field("base_frame", "frames", VI_FIELD(p.node.base_frame), "",
+            "the robot's base (base_link); \"\": the IMU frame. base_frame <- IMU frame is looked up on TF (URDF)"),
+      field("map_frame", "frames", VI_FIELD(p.node.map_frame), "",
+            "if set (publish_tf odom): broadcast map_frame -> odom_frame as identity (no global localizer)"),
+      field("world_frame", "frames", VI_FIELD(p.node.world_frame), "",
+            "publish_tf world: the filter's own world, z up (REP-103), restarting at every reset"),
+      field("body_frame", "frames", VI_FIELD(p.node.body_frame), "",
+            "the IMU frame; \"\": the frame_id of the sensor_msgs/Imu messages"),
+      field("tune_allocator", "frames", VI_FIELD(p.node.tune_allocator), "",
+            "keep large per-frame buffers in the heap (glibc mallopt, process-wide): faster on VMs"),
+      // --- camera
+      field("camera_time_offset_s", "camera", VI_FIELD(p.filter.camera_time_offset_s), "s",
+            "t_imu = t_image + offset (camera-IMU clock offset) at the start; estimated online", false, -1.0, 1.0),
+      field("camera_readout_time_s", "camera", VI_FIELD(p.filter.update.readout_time_s), "s",
+            "rolling shutter: first to last row (0: global shutter)", false, 0.0, 0.1),
+      field("camera_calibration_file", "camera", VI_FIELD(p.node.camera_calibration_file), "",
+            "ROS camera YAML (camera_calibration_parsers) used until camera_info arrives"),
+      stringChoice("extrinsic_source", "camera", VI_FIELD(p.node.extrinsic_source),
+                   "where the camera-IMU extrinsic comes from",
+                   {{"tf", "TF: IMU frame <- the images' frame_id"}, {"parameters", "T_b_c"}}),
+      field("T_b_c", "camera", VI_FIELD(p.node.T_b_c), "",
+            "camera pose in the IMU frame: x y z [m] qx qy qz qw (extrinsic_source parameters)"),
+      stringChoice("image_transport", "camera", VI_FIELD(p.node.image_transport), "how images arrive",
+                   {{"raw", "sensor_msgs/Image"}, {"compressed", "sensor_msgs/CompressedImage on <image>/compressed"}}),
+      // --- filter
+      choice("mechanization", "filter", VI_FIELD(p.filter.mechanization),
+             "inertial mechanization; switching converts the running filter", dyn,
+             std::vector<std::pair<M, std::string>>{
+                 {M::kWorldCentric, "strapdown in the navigation frame (paper)"},
+                 {M::kSensorCentric, "strapdown in the body frame at start (paper)"},
+                 {M::kSensorCentricComposition, "sensor-centric with the robocentric composition step (paper)"}}),
+      choice("composition_trigger", "filter", VI_FIELD(p.filter.composition_trigger),
+             "when the composition step runs (sensor_centric_composition only)", dyn,
+             std::vector<std::pair<C, std::string>>{
+                 {C::kNewLandmarks, "paper: when more than composition_new_landmarks were added"},
+                 {C::kEveryUpdate, "after every image (most consistent)"},
+                 {C::kNever, "never compose"}}),
+      field("composition_new_landmarks", "filter", VI_FIELD(p.filter.composition_new_landmarks), "count",
+            "new_landmarks trigger: compose when more than this many landmarks were added", dyn, 0, 100),
+      field("pixel_noise_px", "filter", VI_FIELD(p.filter.update.pixel_noise_px), "px",
+            "std-dev of a tracked feature position", dyn, 0.1, 10.0),
+      field("gate_probability", "filter", VI_FIELD(p.filter.update.gate_probability), "probability",
+            "chi-square gate on each observation (2 dof); without outliers 0.9999 is more consistent", dyn, 0.5,
+            0.9999),
+      // --- map
+      choice("landmark_init", "map", VI_FIELD(p.filter.landmark_init), "how new landmarks enter the state", dyn,
+             std::vector<std::pair<L, std::string>>{{L::kFixedDepth, "paper: Cartesian point at a fixed depth"},
+                                                    {L::kInverseDepth, "anchored inverse depth (consistent)"}}),
+      field("landmark_depth_m", "map", VI_FIELD(p.filter.landmark_depth_m), "m", "fixed_depth: depth of a new landmark",
+            dyn, 0.5, 100.0),
+      field("landmark_depth_sigma_m", "map", VI_FIELD(p.filter.landmark_depth_sigma_m), "m",
+            "fixed_depth: std-dev along the ray", dyn, 0.1, 100.0),
+      field("inverse_depth_initial_m", "map", VI_FIELD(p.filter.inverse_depth_initial_m), "m",
+            "inverse_depth: prior depth 1/rho0", dyn, 0.5, 100.0),
+      field("inverse_depth_scene_prior", "map", VI_FIELD(p.filter.inverse_depth_scene_prior), "",
+            "inverse_depth: centre the prior at the median depth of the landmarks already seen"),
+      field("inverse_depth_sigma", "map", VI_FIELD(p.filter.inverse_depth_sigma), "1/m",
+            "inverse_depth: prior std-dev of rho (0.5: 95% of it spans 0.8 m to infinity)", dyn, 0.01, 2.0),
+      field("max_landmarks", "map", VI_FIELD(p.filter.max_landmarks), "count", "bound on landmarks in the state", dyn,
+            1, 1000),
+      field("landmark_timeout_s", "map", VI_FIELD(p.filter.landmark_timeout_s), "s",
+            "marginalize landmarks not observed for this long", dyn, 0.0, 60.0),
+      // --- standing
+      field("zero_velocity", "standing", VI_FIELD(p.filter.zero_velocity.enabled), "",
+            "detect standing from the images and apply v = 0", dyn),
+      field("zero_velocity_window_s", "standing", VI_FIELD(p.filter.zero_velocity.window_s), "s",
+            "baseline of the parallax test", dyn, 0.1, 5.0),
+      field("zero_velocity_max_parallax_px", "standing", VI_FIELD(p.filter.zero_velocity.max_parallax_px), "px",
+            "standing below this median de-rotated parallax", dyn, 0.1, 50.0),
+      field("zero_velocity_sigma_mps", "standing", VI_FIELD(p.filter.zero_velocity.velocity_sigma_mps), "m/s",
+            "std-dev of the true velocity while standing (sway)", dyn, 0.001, 1.0),
+      field("zero_velocity_rest_sigma_mps", "standing", VI_FIELD(p.filter.zero_velocity.rest_velocity_sigma_mps), "m/s",
+            "the same while the IMU also shows the rig at rest", dyn, 0.001, 1.0),
+      field("zero_velocity_min_features", "standing", VI_FIELD(p.filter.zero_velocity.min_features), "count",
+            "features seen at both ends of the window to decide at all", dyn, 3, 500),
+      field("zero_velocity_gate_probability", "standing", VI_FIELD(p.filter.zero_velocity.gate_probability),
+            "probability", "chi-square gate of the zero-velocity update", dyn, 0.5, 0.999999),
+      field("zero_velocity_defer_landmarks", "standing", VI_FIELD(p.filter.zero_velocity.defer_landmarks), "",
+            "new landmarks wait until the rig is seen moving (parallax), unless the IMU shows rest", dyn),
+      field("zero_velocity_moving_parallax_px", "standing", VI_FIELD(p.filter.zero_velocity.moving_parallax_px), "px",
+            "seen moving (new landmarks enter) from this parallax, latched until the next stand; >= "
+            "zero_velocity_max_parallax_px",
+            dyn, 0.1, 100.0),
+      field("zero_velocity_moving_speed_mps", "standing", VI_FIELD(p.filter.zero_velocity.moving_speed_mps), "m/s",
+            "before the detector's first window: moving if the estimated speed is above this by 2 sigma", false, 0.01,
+            10.0),
+      field("zero_velocity_still_accel_std_mps2", "standing", VI_FIELD(p.filter.zero_velocity.still_accel_std_mps2),
+            "m/s^2", "at rest: std-dev of each accelerometer axis below this", dyn, 0.001, 10.0),
+      field("zero_velocity_still_gyro_radps", "standing", VI_FIELD(p.filter.zero_velocity.still_gyro_radps), "rad/s",
+            "at rest: every angular rate below this", dyn, 0.0001, 10.0),
+      // --- imu
+      field("accel_noise_density", "imu", VI_FIELD(p.filter.imu_noise.accel_noise_density), "m/s^2/sqrt(Hz)",
+            "accelerometer white noise", dyn, 1e-6, 1.0),
+      field("gyro_noise_density", "imu", VI_FIELD(p.filter.imu_noise.gyro_noise_density), "rad/s/sqrt(Hz)",
+            "gyroscope white noise", dyn, 1e-7, 0.1),
+      field("accel_random_walk", "imu", VI_FIELD(p.filter.imu_noise.accel_random_walk), "m/s^3/sqrt(Hz)",
+            "accelerometer bias random walk", dyn, 0.0, 1.0),
+      field("gyro_random_walk", "imu", VI_FIELD(p.filter.imu_noise.gyro_random_walk), "rad/s^2/sqrt(Hz)",
+            "gyroscope bias random walk", dyn, 0.0, 0.1),
+      field("gravity_mps2", "imu", VI_FIELD(p.filter.gravity_mps2), "m/s^2", "local gravity", false, 9.7, 9.9),
+      field("max_imu_gap_s", "imu", VI_FIELD(p.filter.max_imu_gap_s), "s",
+            "longer IMU gaps are reported in the diagnostics (and bridged with added uncertainty)", false, 0.001, 10.0),
+      // --- initialization
+      field("dynamic_init", "initialization", VI_FIELD(p.dynamic_init_enabled), "",
+            "also initialize while moving (visual-inertial alignment of a window of tracks and IMU)"),
+      field("dynamic_init_window_s", "initialization", VI_FIELD(p.dynamic_init.window_s), "s",
+            "window of images it aligns", false, 0.2, 10.0),
+      field("dynamic_init_max_velocity_sigma_mps", "initialization", VI_FIELD(p.dynamic_init.max_velocity_sigma_mps),
+            "m/s", "waits while the velocity would be known worse than this (too little motion)", false, 0.001, 10.0),
+      field("dynamic_init_max_tilt_sigma_rad", "initialization", VI_FIELD(p.dynamic_init.max_tilt_sigma_rad), "rad",
+            "waits while roll/pitch would be known worse than this", false, 0.001, 1.0),
+      field("dynamic_init_gyro_bias_sigma_radps", "initialization", VI_FIELD(p.dynamic_init.gyro_bias_sigma_radps),
+            "rad/s", "initial std-dev of the gyro bias it cannot see (turn-on bias)", false, 1e-6, 1.0),
+      field("static_window_s", "initialization", VI_FIELD(p.static_init.window_s), "s",
+            "the filter starts after this long at rest", false, 0.1, 60.0),
+      field("static_max_accel_std_mps2", "initialization", VI_FIELD(p.static_init.max_accel_std_mps2), "m/s^2",
+            "\"at rest\": std-dev of |accel| (its 50 ms means: vibration averages out) below this", false, 1e-4, 10.0),
+      field("static_max_gyro_std_radps", "initialization", VI_FIELD(p.static_init.max_gyro_std_radps), "rad/s",
+            "\"at rest\": std-dev of each gyro axis (its 50 ms means) below this", false, 1e-5, 10.0),
+      field("initial_sigma_position_m", "initialization", VI_FIELD(p.filter.initial.position_m), "m",
+            "registration error of the start position", false, 0.0, 100.0),
+      field("initial_sigma_velocity_mps", "initialization", VI_FIELD(p.filter.initial.velocity_mps), "m/s",
+            "initial velocity std-dev (static start)", false, 1e-4, 10.0),
+      field("initial_sigma_roll_pitch_rad", "initialization", VI_FIELD(p.filter.initial.roll_pitch_rad), "rad",
+            "initial roll and pitch std-dev (~1 deg)", false, 0.0, 1.0),
+      field("initial_sigma_yaw_rad", "initialization", VI_FIELD(p.filter.initial.yaw_rad), "rad",
+            "initial yaw std-dev (~2 deg; yaw is unobservable: 0 is the reference)", false, 0.0, 3.2),
+      field("initial_sigma_accel_bias_mps2", "initialization", VI_FIELD(p.filter.initial.accel_bias_mps2), "m/s^2",
+            "initial accelerometer bias std-dev", false, 1e-5, 1.0),
+      field("initial_sigma_gyro_bias_radps", "initialization", VI_FIELD(p.filter.initial.gyro_bias_radps), "rad/s",
+            "initial gyro bias std-dev after the static gyro-bias estimate", false, 1e-6, 0.5),
+      field("initial_sigma_time_offset_s", "initialization", VI_FIELD(p.filter.initial.time_offset_s), "s",
+            "camera-IMU time offset std-dev, estimated online (0: fixed at camera_time_offset_s)", false, 0.0, 0.5),
+      // --- lost
+      field("lost_detection", "lost", VI_FIELD(p.filter.divergence.enabled), "",
+            "detect a lost (diverged) filter, reset it and re-initialize"),
+      field("lost_max_speed_mps", "lost", VI_FIELD(p.filter.divergence.max_speed_mps), "m/s",
+            "lost when the body moved faster than this all the time (a pedestrian does not)", false, 0.1, 1000.0),
+      field("lost_max_rejected_fraction", "lost", VI_FIELD(p.filter.divergence.max_rejected_fraction), "ratio",
+            "lost when the gate rejected more than this of the observations (consistent: ~0.05)", false, 0.01, 1.0),
+      field("lost_window_s", "lost", VI_FIELD(p.filter.divergence.window_s), "s", "window of both tests", false, 0.1,
+            60.0),
+      // --- tracker
+      choice("detector", "tracker", VI_FIELD(p.tracker.detector), "corner detector", dyn,
+             std::vector<std::pair<D, std::string>>{{D::kShiTomasi, "Shi-Tomasi corners (cv::goodFeaturesToTrack)"},
+                                                    {D::kFast, "FAST corners (cv::FAST)"}}),
+      field("max_tracks", "tracker", VI_FIELD(p.tracker.max_tracks), "count", "target number of feature tracks", dyn, 8,
+            1000),
+      field("min_distance_px", "tracker", VI_FIELD(p.tracker.min_distance_px), "px", "minimum distance between corners",
+            dyn, 1.0, 100.0),
+      field("quality_level", "tracker", VI_FIELD(p.tracker.quality_level), "ratio",
+            "Shi-Tomasi quality relative to the best corner", dyn, 0.0001, 0.5),
+      field("fast_threshold", "tracker", VI_FIELD(p.tracker.fast_threshold), "gray levels", "FAST intensity threshold",
+            dyn, 1, 200),
+      field("klt_window_px", "tracker", VI_FIELD(p.tracker.klt_window_px), "px", "KLT window size (odd)", dyn, 5, 51),
+      field("klt_pyramid_levels", "tracker", VI_FIELD(p.tracker.klt_pyramid_levels), "count", "KLT pyramid levels", dyn,
+            0, 6),
+      field("fb_threshold_px", "tracker", VI_FIELD(p.tracker.fb_threshold_px), "px", "forward-backward check bound",
+            dyn, 0.05, 10.0),
+      field("ransac_threshold_px", "tracker", VI_FIELD(p.tracker.ransac_threshold_px), "px",
+            "epipolar RANSAC threshold", dyn, 0.1, 10.0),
+      field("redetect_fraction", "tracker", VI_FIELD(p.tracker.redetect_fraction), "ratio",
+            "search new corners once the tracks fall below this fraction of max_tracks (1: whenever one is lost)", dyn,
+            0.05, 1.0),
+      field("max_image_width_px", "tracker", VI_FIELD(p.tracker.max_image_width_px), "px",
+            "wider images are shrunk to this width before tracking; every [px] value refers to the tracked image (0: "
+            "full size)",
+            false, 0, 10000),
+      // --- outputs
+      field("max_image_queue", "outputs", VI_FIELD(p.node.max_image_queue), "count",
+            "images waiting for IMU beyond this are dropped", false, 1, 1000),
+      field("time_jump_reset_s", "outputs", VI_FIELD(p.node.time_jump_reset_s), "s",
+            "stamps this far backwards reset the filter (bag restart)", false, 0.001, 1e6),
+      field("path_max_length", "outputs", VI_FIELD(p.node.path_max_length), "count", "poses kept in the published path",
+            false, 1, 1000000),
+      field("max_image_gap_s", "outputs", VI_FIELD(p.node.max_image_gap_s), "s",
+            "longer gaps between processed images are reported in the diagnostics", false, 0.001, 1e6),
+  };
+}
+
+#undef VI_FIELD
+
+std::string typeName(const ParamValue& v) {
+  static const char* names[] = {"bool", "int", "double", "string", "list of doubles"};
+  return names[v.index()];
+}
+
+double asNumber(const ParamValue& v) {
+  if (const int* i = std::get_if<int>(&v)) return *i;
+  return std::get<double>(v);
+}
+
+std::string rangeText(const ParamSpec& s) {
+  if (!std::isfinite(s.min) && !std::isfinite(s.max)) return "";
+  const bool is_int = std::holds_alternative<int>(s.defaultValue());
+  auto num = [&](double x) { return is_int ? std::to_string(static_cast<long>(x)) : toYaml(ParamValue(x)); };
+  return "[" + num(s.min) + ", " + num(s.max) + "]";
+}
+
+std::string choicesText(const ParamSpec& s, const char* sep) {
+  std::string out;
+  for (const auto& c : s.choices) out += (out.empty() ? "" : sep) + c.first;
+  return out;
+}
+
+}  // namespace
+
+std::string ParamSpec::check(const ParamValue& v) const {
+  const ParamValue d = defaultValue();
+  if (v.index() != d.index()) return name + " must be a " + typeName(d) + " (got a " + typeName(v) + ")";
+  if (std::holds_alternative<int>(v) || std::holds_alternative<double>(v)) {
+    const double x = asNumber(v);
+    if (!(x >= min && x <= max)) return name + " must be in " + rangeText(*this) + " (got " + toYaml(v) + ")";
+  }
+  if (!choices.empty()) {
+    const std::string& s = std::get<std::string>(v);
+    if (std::none_of(choices.begin(), choices.end(), [&](const auto& c) { return c.first == s; })) {
+      return name + " must be one of " + choicesText(*this, ", ") + " (got '" + s + "')";
+    }
+  }
+  return "";
+}
+
+const std::vector<ParamGroup>& paramGroups() {
+  static const std::vector<ParamGroup> groups = {
+      {"frames", "frames (REP-105)"},
+      {"camera", "camera"},
+      {"filter", "filter"},
+      {"map", "map"},
+      {"standing", "standing: zero-velocity update when the camera sees no translation parallax"},
+      {"imu", "IMU: continuous-time noise densities (datasheet or Allan variance), gravity"},
+      {"initialization", "initialization"},
+      {"lost", "lost detection: reset and re-initialize when, over lost_window_s, ..."},
+      {"tracker", "tracker"},
+      {"outputs", "synchronization and outputs"},
+  };
+  return groups;
+}
+
+const std::vector<ParamSpec>& paramTable() {
+  static const std::vector<ParamSpec> table = makeTable();
+  return table;
+}
+
+const ParamSpec* findParam(const std::string& name) {
+  for (const auto& s : paramTable()) {
+    if (s.name == name) return &s;
+  }
+  return nullptr;
+}
+
+std::string closestParamName(const std::string& name) {
+  // Levenshtein distance; a suggestion only within a third of the name's length (at least 2).
+  auto distance = [](const std::string& a, const std::string& b) {
+    std::vector<size_t> row(b.size() + 1);
+    for (size_t j = 0; j <= b.size(); ++j) row[j] = j;
+    for (size_t i = 1; i <= a.size(); ++i) {
+      size_t diag = row[0];
+      row[0] = i;
+      for (size_t j = 1; j <= b.size(); ++j) {
+        const size_t up = row[j];
+        row[j] = std::min({row[j] + 1, row[j - 1] + 1, diag + (a[i - 1] == b[j - 1] ? 0 : 1)});
+        diag = up;
+      }
+    }
+    return row[b.size()];
+  };
+  std::string best;
+  size_t best_d = std::max<size_t>(2, name.size() / 3) + 1;
+  for (const auto& s : paramTable()) {
+    const size_t d = distance(name, s.name);
+    if (d < best_d) {
+      best_d = d;
+      best = s.name;
+    }
+  }
+  return best;
+}
+
+std::string toYaml(const ParamValue& v) {
+  struct Visitor {
+    std::string operator()(bool b) const { return b ? "true" : "false"; }
+    std::string operator()(int i) const { return std::to_string(i); }
+    std::string operator()(double d) const {
+      // The shortest decimal that reads back exactly, always with a '.' or an exponent (a double).
+      // Plain decimals for everyday magnitudes, exponents for the tiny and the huge.
+      const bool plain = d == 0.0 || (std::abs(d) >= 1e-4 && std::abs(d) < 1e7);
+      char buf[64];
+      for (int precision = plain ? 0 : 1; precision <= 17; ++precision) {
+        std::snprintf(buf, sizeof(buf), plain ? "%.*f" : "%.*g", precision, d);
+        if (std::strtod(buf, nullptr) == d) break;
+      }
+      // A '.' in the mantissa: YAML 1.1 (rosparam's PyYAML) reads "2e-05" as a string.
+      std::string s = buf;
+      const size_t e = s.find_first_of("eE");
+      const std::string mantissa = s.substr(0, e);
+      if (mantissa.find_first_of(".n") == std::string::npos) s.insert(mantissa.size(), ".0");
+      return s;
+    }
+    std::string operator()(const std::string& s) const { return s.empty() ? "\"\"" : s; }
+    std::string operator()(const std::vector<double>& v) const {
+      std::string s = "[";
+      for (size_t i = 0; i < v.size(); ++i) s += (i ? ", " : "") + (*this)(v[i]);
+      return s + "]";
+    }
+  };
+  return std::visit(Visitor(), v);
+}
+
+std::string documentedYaml() {
+  std::ostringstream o;
+  o << "# vi_ekf_slam parameters (private namespace of the node/nodelet), generated from\n"
+    << "# src/ros/param_table.cc by `make params`: edit the table, not this file. Every value is\n"
+    << "# validated at startup; unknown names and impossible values stop the node with a list of the\n"
+    << "# problems. (dyn): can also change while running: " << kDynHelp << "\n";
+  for (const auto& g : paramGroups()) {
+    std::string head = "# --- " + g.title + " ";
+    head.resize(std::max<size_t>(head.size(), 100), '-');
+    o << "\n" << head << "\n";
+    for (const auto& s : paramTable()) {
+      if (s.group != g.id) continue;
+      std::string line = s.name + ": " + toYaml(s.defaultValue());
+      line.resize(std::max<size_t>(line.size() + 1, 44), ' ');
+      line += "# ";
+      if (s.dynamic) line += "(dyn) ";
+      if (!s.unit.empty()) line += "[" + s.unit + "] ";
+      line += s.description;
+      if (!s.choices.empty()) line += ": " + choicesText(s, " | ");
+      const std::string range = rangeText(s);
+      if (!range.empty()) line += ", in " + range;
+      o << line << "\n";
+    }
+  }
+  return o.str();
+}
+
+std::string reconfigureCfg() {
+  std::ostringstream o;
+  auto quoted = [](const std::string& s) {
+    std::string q = "\"";
+    for (char c : s) q += (c == '"' || c == '\\') ? std::string("\\") + c : std::string(1, c);
+    return q + "\"";
+  };
+  o << "#!/usr/bin/env python3\n"
+    << "# The parameters of vi_ekf_slam that can change while the filter runs (dynamic_reconfigure),\n"
+    << "# generated from src/ros/param_table.cc by `make params`: edit the table, not this file.\n"
+    << "# Changing `mechanization` converts the running filter (state and covariance) and keeps the map.\n"
+    << "PACKAGE = \"vi_ekf_slam\"\n\n"
+    << "from dynamic_reconfigure.parameter_generator_catkin import ParameterGenerator, int_t, double_t, str_t, "
+       "bool_t\n\n"
+    << "gen = ParameterGenerator()\n";
+  for (const auto& g : paramGroups()) {
+    bool any = false;
+    for (const auto& s : paramTable()) any = any || (s.group == g.id && s.dynamic);
+    if (!any) continue;
+    o << "\n" << g.id << "_group = gen.add_group(" << quoted(g.id) << ")\n";
+    for (const auto& s : paramTable()) {
+      if (s.group != g.id || !s.dynamic) continue;
+      const ParamValue d = s.defaultValue();
+      const std::string desc = s.description + (s.unit.empty() ? "" : " [" + s.unit + "]");
+      static const char* types[] = {"bool_t", "int_t", "double_t", "str_t", "?"};
+      o << g.id << "_group.add(" << quoted(s.name) << ", " << types[d.index()] << ", 0, " << quoted(desc) << ", ";
+      if (std::holds_alternative<std::string>(d)) {
+        o << quoted(std::get<std::string>(d));
+      } else if (const bool* b = std::get_if<bool>(&d)) {
+        o << (*b ? "True" : "False") << ")\n";  // Python
+        continue;
+      } else {
+        o << toYaml(d);
+      }
+      if (std::holds_alternative<int>(d)) o << ", " << static_cast<long>(s.min) << ", " << static_cast<long>(s.max);
+      if (std::holds_alternative<double>(d))
+        o << ", " << toYaml(ParamValue(s.min)) << ", " << toYaml(ParamValue(s.max));
+      if (!s.choices.empty()) {
+        o << ",\n    edit_method=gen.enum([";
+        for (size_t i = 0; i < s.choices.size(); ++i) {
+          o << (i ? ",\n                         " : "") << "gen.const(" << quoted(s.choices[i].first) << ", str_t, "
+            << quoted(s.choices[i].first) << ", " << quoted(s.choices[i].second) << ")";
+        }
+        o << "], " << quoted(s.description) << ")";
+      }
+      o << ")\n";
+    }
+  }
+  o << "\n# The generated class is vi_ekf_slam::EkfSlamReconfigureConfig (EkfSlamConfig is the core struct).\n"
+    << "exit(gen.generate(PACKAGE, \"vi_ekf_slam\", \"EkfSlamReconfigure\"))\n";
+  return o.str();
+}
+
+std::string parameterReference() {
+  std::ostringstream o;
+  o << "# Parameters\n\n"
+    << "Generated from `src/ros/param_table.cc` by `make params` (as are `config/vi_ekf_slam.yaml` and\n"
+    << "`cfg/EkfSlam.cfg`). Private parameters of the node/nodelet; \"dyn\": can also change while\n"
+    << "running (`" << kDynHelp << "`). Unknown names and values outside their range stop the node with\n"
+    << "the list of problems; the values in effect are echoed at startup.\n";
+  for (const auto& g : paramGroups()) {
+    o << "\n## " << g.title
+      << "\n\n| name | default | unit | range / choices | dyn | description |\n|---|---|---|---|---|---|\n";
+    for (const auto& s : paramTable()) {
+      if (s.group != g.id) continue;
+      o << "| `" << s.name << "` | `" << toYaml(s.defaultValue()) << "` | " << s.unit << " | "
+        << (s.choices.empty() ? rangeText(s) : choicesText(s, ", ")) << " | " << (s.dynamic ? "yes" : "") << " | "
+        << s.description;
+      for (const auto& c : s.choices) o << "; `" << c.first << "`: " << c.second;
+      o << " |\n";
+    }
+  }
+  return o.str();
+}
+
+}  // namespace vi_ekf_slam::glue
