@@ -16,7 +16,7 @@ DEVEL    := $(WS)/devel
 BIN      := $(DEVEL)/lib/vi_ekf_slam
 CATKIN   := cd $(WS) && catkin_make -j$(JOBS) -DCMAKE_BUILD_TYPE=Release -DDATA_DIR=$(DATA_DIR) -DCMAKE_EXPORT_COMPILE_COMMANDS=ON
 
-.PHONY: all deps workspace build test lint demo study suite initsuite bag screenshot bench soak realdata params clean help
+.PHONY: all deps workspace build test lint demo study suite initsuite bag screenshot bench soak realdata params rebuild-check clean help
 
 BAG ?= results/bags/hallway.bag
 RVIZ ?= 0
@@ -83,7 +83,15 @@ lint: build
 	clang-tidy -p $(WS)/build --quiet $(wildcard src/core/*.cc) 2>&1 | { grep -v "warnings generated" || true; }
 	@echo "lint: clean"
 
-test: build lint
+# A second build with nothing changed must compile nothing (a generator re-running at every build
+# recompiles what includes its output).
+rebuild-check: build
+	@$(CATKIN) > $(WS)/rebuild.log 2>&1 || { tail -n 30 $(WS)/rebuild.log; exit 1; }
+	@if grep -E "Building CXX|Generating" $(WS)/rebuild.log; then \
+	  echo "rebuild-check: a second build with nothing changed did the work above"; exit 1; fi
+	@echo "rebuild-check: a second build compiles nothing"
+
+test: build lint rebuild-check
 	$(CATKIN) tests
 	@rm -rf $(WS)/build/test_results
 	$(CATKIN) run_tests -j1 | tail -n 200
@@ -94,7 +102,7 @@ test: build lint
 # dynamic_reconfigure definition and the reference. A test fails while a committed copy is stale.
 params: build
 	$(BIN)/vi_ekf_slam_params --yaml > config/vi_ekf_slam.yaml
-	$(BIN)/vi_ekf_slam_params --cfg > cfg/EkfSlam.cfg
+	$(BIN)/vi_ekf_slam_params --cfg > cfg/EkfSlamReconfigure.cfg
 	$(BIN)/vi_ekf_slam_params --markdown > docs/parameters.md
 
 # The rendered hallway walk (2 s standing + 35 s walk), cached until the renderer changes.

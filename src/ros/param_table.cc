@@ -476,7 +476,7 @@ std::string parameterReference() {
   std::ostringstream o;
   o << "# Parameters\n\n"
     << "Generated from `src/ros/param_table.cc` by `make params` (as are `config/vi_ekf_slam.yaml` and\n"
-    << "`cfg/EkfSlam.cfg`). Private parameters of the node/nodelet; \"dyn\": can also change while\n"
+    << "`cfg/EkfSlamReconfigure.cfg`). Private parameters of the node/nodelet; \"dyn\": can also change while\n"
     << "running (`" << kDynHelp << "`). Unknown names and values outside their range stop the node with\n"
     << "the list of problems; the values in effect are echoed at startup.\n";
   for (const auto& g : paramGroups()) {

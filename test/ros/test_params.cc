@@ -68,12 +68,12 @@ const std::string kDefaults = std::string(VI_EKF_SLAM_SOURCE_DIR) + "/config/vi_
 
 TEST(Params, TheGeneratedFilesAreCurrent) {
   EXPECT_EQ(fileText("config/vi_ekf_slam.yaml"), documentedYaml()) << "run `make params`";
-  EXPECT_EQ(fileText("cfg/EkfSlam.cfg"), reconfigureCfg()) << "run `make params`";
+  EXPECT_EQ(fileText("cfg/EkfSlamReconfigure.cfg"), reconfigureCfg()) << "run `make params`";
   EXPECT_EQ(fileText("docs/parameters.md"), parameterReference()) << "run `make params`";
 }
 
 TEST(Params, TheBuiltReconfigureServerHasTheTablesDefaultsAndRanges) {
-  // The generated EkfSlamReconfigureConfig (from cfg/EkfSlam.cfg) against the table.
+  // The generated EkfSlamReconfigureConfig (from cfg/EkfSlamReconfigure.cfg) against the table.
   dynamic_reconfigure::Config def, lo, hi;
   EkfSlamReconfigureConfig::__getDefault__().__toMessage__(def);
   EkfSlamReconfigureConfig::__getMin__().__toMessage__(lo);

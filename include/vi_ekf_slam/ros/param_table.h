@@ -1,7 +1,7 @@
 // Every parameter of the node, written once: name, type and default (the value in NodeParams{}),
 // range, unit, description, and whether it can change while running. Loading (unknown names are
 // errors), range checks, the startup echo and dynamic_reconfigure all read this table; the
-// documented YAML (config/vi_ekf_slam.yaml), the dynamic_reconfigure definition (cfg/EkfSlam.cfg)
+// documented YAML (config/vi_ekf_slam.yaml), the dynamic_reconfigure definition (cfg/EkfSlamReconfigure.cfg)
 // and the parameter reference (docs/parameters.md) are generated from it (`make params`), and a
 // test fails when a committed copy differs.
 #pragma once
