@@ -16,7 +16,7 @@ PKGS=(
   libcv-bridge-dev libimage-transport-dev librosbag-dev python3-rosbag
   librostest-dev python3-rostest python3-roslaunch rosbash
   python3-dynamic-reconfigure libdynamic-reconfigure-config-init-mutex-dev
-  libstd-srvs-dev libdiagnostic-updater-dev nlohmann-json3-dev libboost-program-options-dev libyaml-cpp-dev
+  libstd-srvs-dev libdiagnostic-updater-dev nlohmann-json3-dev libboost-dev libboost-program-options-dev libyaml-cpp-dev
   ros-sensor-msgs ros-nav-msgs ros-geometry-msgs ros-visualization-msgs ros-std-srvs
   python3-sensor-msgs python3-nav-msgs python3-geometry-msgs python3-std-msgs python3-tf2-msgs python3-tf2-ros
   python3-diagnostic-msgs python3-rostopic python3-rosnode python3-rospy python3-rosservice

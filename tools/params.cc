@@ -11,7 +11,8 @@ int main(int argc, char** argv) {
   const std::string usage = "vi_ekf_slam_params --yaml | --cfg | --markdown";
   po::options_description options("options");
   options.add_options()("yaml", "config/vi_ekf_slam.yaml: every parameter with its default, unit and range")(
-      "cfg", "cfg/EkfSlamReconfigure.cfg: the dynamic_reconfigure definition of the parameters that can change while running")(
+      "cfg",
+      "cfg/EkfSlamReconfigure.cfg: the dynamic_reconfigure definition of the parameters that can change while running")(
       "markdown", "docs/parameters.md: the reference table");
   const po::variables_map vm =
       vi_ekf_slam::cli::parse(argc, argv, usage, "Prints a file generated from the node's parameter table.", options);

@@ -551,10 +551,9 @@ int main(int argc, char** argv) {
     std::cout << "\n" << healthTable(health);
   }
   if (!results.empty()) {
-    std::ostringstream cfg;
-    cfg << "{\"bag\": \"" << bag_path << "\", \"config\": \"" << config << "\", \"mode\": \""
-        << (args.count("recorded") ? "live replay" : "offline") << "\"}";
-    eval::writeRunReport(out, results, cfg.str());
+    eval::writeRunReport(
+        out, results,
+        {{"bag", bag_path}, {"config", config}, {"mode", args.count("recorded") ? "live replay" : "offline"}});
     std::ifstream md(out + "/summary.md");
     std::cout << "\nagainst the bag's ground truth:\n" << md.rdbuf();
   } else {

@@ -55,7 +55,7 @@ int main(int argc, char** argv) {
       results.emplace_back(name, r.metrics);
     }
   }
-  eval::writeRunReport(out, results, "{\"data\": \"euroc_v1_01_features/eqvio_processed_30s.csv\"}");
+  eval::writeRunReport(out, results, {{"data", "euroc_v1_01_features/eqvio_processed_30s.csv"}});
   std::printf("\nwritten to %s\n", out.c_str());
   return 0;
 }

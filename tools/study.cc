@@ -28,6 +28,8 @@
 #include <sstream>
 #include <thread>
 
+#include <nlohmann/json.hpp>
+
 #include "cli.h"
 #include "vi_ekf_slam/sim/monte_carlo.h"
 #include "vi_ekf_slam/core/allocator_tuning.h"
@@ -337,13 +339,6 @@ void writeConfigFiles(const fs::path& dir, const sim::ConsistencySummary& s, con
   }
 }
 
-std::string jsonNumber(double v) {
-  if (!std::isfinite(v)) return "null";
-  std::ostringstream s;
-  s << std::setprecision(6) << v;
-  return s.str();
-}
-
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -437,45 +432,53 @@ int main(int argc, char** argv) {
     writeConfigFiles(out / configs[c].first, sums.back(), results[c], sc);
   }
 
-  // summary.json: each configuration name -> metrics, plus the settings used.
-  std::ofstream js(out / "summary.json");
-  js << "{\n  \"config\": {\"trajectory\": \"" << traj_name << "\", \"seed\": " << o.seed << ", \"runs\": " << o.runs
-     << ", \"recorded_imu\": \"" << o.imu << "\", \"start\": \""
-     << (sc.dynamic_init     ? "dynamic"
-         : sc.start_at_truth ? "truth"
-                             : "prior")
-     << "\", \"imu_noise\": \"" << o.imu_noise << "\", \"start_offsets_s\": [" << starts.str()
-     << "], \"duration_s\": " << jsonNumber(duration) << ", \"world_landmarks\": " << sc.world.size()
-     << ", \"imu_rate_hz\": " << sc.imu.rate_hz << ", \"camera_rate_hz\": " << sc.cam.rate_hz
-     << ", \"pixel_noise_px\": " << sc.cam.pixel_noise_px
-     << ", \"accel_noise_density\": " << jsonNumber(sc.imu.noise.accel_noise_density)
-     << ", \"gyro_noise_density\": " << jsonNumber(sc.imu.noise.gyro_noise_density)
-     << ", \"accel_random_walk\": " << jsonNumber(sc.imu.noise.accel_random_walk)
-     << ", \"gyro_random_walk\": " << jsonNumber(sc.imu.noise.gyro_random_walk) << ", \"pose_nees_band\": ["
-     << jsonNumber(sums[0].pose_band.lo) << ", " << jsonNumber(sums[0].pose_band.hi) << "]}";
+  // summary.json: each configuration name -> metrics, plus the settings used (non-finite: null).
+  nlohmann::ordered_json js;
+  js["config"] = {{"trajectory", traj_name},
+                  {"seed", o.seed},
+                  {"runs", o.runs},
+                  {"recorded_imu", o.imu},
+                  {"start", sc.dynamic_init     ? "dynamic"
+                            : sc.start_at_truth ? "truth"
+                                                : "prior"},
+                  {"imu_noise", o.imu_noise},
+                  {"start_offsets_s", offsets},
+                  {"duration_s", duration},
+                  {"world_landmarks", sc.world.size()},
+                  {"imu_rate_hz", sc.imu.rate_hz},
+                  {"camera_rate_hz", sc.cam.rate_hz},
+                  {"pixel_noise_px", sc.cam.pixel_noise_px},
+                  {"accel_noise_density", sc.imu.noise.accel_noise_density},
+                  {"gyro_noise_density", sc.imu.noise.gyro_noise_density},
+                  {"accel_random_walk", sc.imu.noise.accel_random_walk},
+                  {"gyro_random_walk", sc.imu.noise.gyro_random_walk},
+                  {"pose_nees_band", {sums[0].pose_band.lo, sums[0].pose_band.hi}}};
   for (size_t c = 0; c < sums.size(); ++c) {
     const auto& s = sums[c];
     const auto& cfg = configs[c].second;
-    js << ",\n  \"" << s.name << "\": {\"mechanization\": \"" << toString(cfg.mechanization)
-       << "\", \"landmark_init\": \"" << toString(cfg.landmark_init) << "\", \"composition_trigger\": \""
-       << toString(cfg.composition_trigger) << "\", \"ate_position_m\": " << jsonNumber(s.ate_position_m)
-       << ", \"ate_posyaw_m\": " << jsonNumber(s.ate_posyaw_m)
-       << ", \"real_time_factor\": " << jsonNumber(s.real_time_factor)
-       << ", \"ate_orientation_deg\": " << jsonNumber(s.ate_orientation_deg)
-       << ", \"final_position_error_m\": " << jsonNumber(s.final_position_error_m)
-       << ", \"final_position_error_pct\": " << jsonNumber(s.final_position_error_pct)
-       << ", \"distance_m\": " << jsonNumber(s.distance_m) << ", \"nees_position\": " << jsonNumber(s.nees_position)
-       << ", \"nees_orientation\": " << jsonNumber(s.nees_orientation) << ", \"nees_pose\": " << jsonNumber(s.nees_pose)
-       << ", \"consistent_fraction\": " << jsonNumber(s.consistent_fraction)
-       << ", \"final_scale_ratio\": " << jsonNumber(s.final_scale_ratio) << ", \"runs\": " << s.runs
-       << ", \"filter_ms_mean\": " << jsonNumber(s.mean_update_ms)
-       << ", \"filter_ms_p95\": " << jsonNumber(s.p95_update_ms)
-       << ", \"nees_pose_first_10s\": " << jsonNumber(s.nees_pose_early) << ", \"runs_started\": " << s.runs_started
-       << ", \"init_delay_s\": [";
-    for (size_t r = 0; r < s.init_delay_s.size(); ++r) js << (r ? ", " : "") << jsonNumber(s.init_delay_s[r]);
-    js << "]}";
+    js[s.name] = {{"mechanization", toString(cfg.mechanization)},
+                  {"landmark_init", toString(cfg.landmark_init)},
+                  {"composition_trigger", toString(cfg.composition_trigger)},
+                  {"ate_position_m", s.ate_position_m},
+                  {"ate_posyaw_m", s.ate_posyaw_m},
+                  {"real_time_factor", s.real_time_factor},
+                  {"ate_orientation_deg", s.ate_orientation_deg},
+                  {"final_position_error_m", s.final_position_error_m},
+                  {"final_position_error_pct", s.final_position_error_pct},
+                  {"distance_m", s.distance_m},
+                  {"nees_position", s.nees_position},
+                  {"nees_orientation", s.nees_orientation},
+                  {"nees_pose", s.nees_pose},
+                  {"consistent_fraction", s.consistent_fraction},
+                  {"final_scale_ratio", s.final_scale_ratio},
+                  {"runs", s.runs},
+                  {"filter_ms_mean", s.mean_update_ms},
+                  {"filter_ms_p95", s.p95_update_ms},
+                  {"nees_pose_first_10s", s.nees_pose_early},
+                  {"runs_started", s.runs_started},
+                  {"init_delay_s", s.init_delay_s}};
   }
-  js << "\n}\n";
+  std::ofstream(out / "summary.json") << js.dump(2) << "\n";
 
   std::ostringstream md;
   md << "# Study: " << traj_name << " (" << o.runs << " runs, seed " << o.seed << ", " << std::fixed

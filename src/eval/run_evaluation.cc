@@ -26,13 +26,6 @@ double yawOf(const Quat& q) {
   return std::atan2(x.y(), x.x());
 }
 
-std::string num(double v) {
-  if (!std::isfinite(v)) return "null";
-  std::ostringstream s;
-  s << std::setprecision(6) << v;
-  return s.str();
-}
-
 }  // namespace
 
 RunMetrics evaluateRun(const std::vector<EstimatedPose>& est, const std::vector<StampedPose>& truth,
@@ -139,26 +132,34 @@ RunMetrics evaluateRun(const std::vector<EstimatedPose>& est, const std::vector<
 }
 
 void writeRunReport(const std::string& dir, const std::vector<std::pair<std::string, RunMetrics>>& runs,
-                    const std::string& config_json) {
+                    const nlohmann::ordered_json& config) {
   std::filesystem::create_directories(dir);
-  std::ofstream js(dir + "/summary.json");
-  js << "{\n  \"config\": " << config_json;
+  nlohmann::ordered_json js;  // non-finite numbers are written as null
+  js["config"] = config;
   for (const auto& [name, m] : runs) {
-    js << ",\n  \"" << name << "\": {\"ate_position_m\": " << num(m.ate_position_m)
-       << ", \"ate_posyaw_m\": " << num(m.ate_posyaw_m) << ", \"ate_orientation_deg\": " << num(m.ate_orientation_deg)
-       << ", \"final_position_error_m\": " << num(m.final_position_error_m)
-       << ", \"final_position_error_pct\": " << num(m.final_position_error_pct)
-       << ", \"distance_m\": " << num(m.distance_m) << ", \"nees_position\": " << num(m.nees_position)
-       << ", \"nees_orientation\": " << num(m.nees_orientation) << ", \"nees_pose\": " << num(m.nees_pose)
-       << ", \"consistent_fraction\": " << num(m.consistent_fraction)
-       << ", \"final_scale_ratio\": " << num(m.final_scale_ratio) << ", \"map_landmarks\": " << m.map_landmarks
-       << ", \"map_error_median_m\": " << num(m.map_error_median_m)
-       << ", \"map_error_p90_m\": " << num(m.map_error_p90_m) << ", \"runs\": 1, \"frames\": " << m.frames
-       << ", \"duration_s\": " << num(m.duration_s) << ", \"processing_ms_mean\": " << num(m.processing_ms_mean)
-       << ", \"processing_ms_p95\": " << num(m.processing_ms_p95) << ", \"tracker_ms_mean\": " << num(m.tracker_ms_mean)
-       << ", \"real_time_factor\": " << num(m.real_time_factor) << "}";
+    js[name] = {{"ate_position_m", m.ate_position_m},
+                {"ate_posyaw_m", m.ate_posyaw_m},
+                {"ate_orientation_deg", m.ate_orientation_deg},
+                {"final_position_error_m", m.final_position_error_m},
+                {"final_position_error_pct", m.final_position_error_pct},
+                {"distance_m", m.distance_m},
+                {"nees_position", m.nees_position},
+                {"nees_orientation", m.nees_orientation},
+                {"nees_pose", m.nees_pose},
+                {"consistent_fraction", m.consistent_fraction},
+                {"final_scale_ratio", m.final_scale_ratio},
+                {"map_landmarks", m.map_landmarks},
+                {"map_error_median_m", m.map_error_median_m},
+                {"map_error_p90_m", m.map_error_p90_m},
+                {"runs", 1},
+                {"frames", m.frames},
+                {"duration_s", m.duration_s},
+                {"processing_ms_mean", m.processing_ms_mean},
+                {"processing_ms_p95", m.processing_ms_p95},
+                {"tracker_ms_mean", m.tracker_ms_mean},
+                {"real_time_factor", m.real_time_factor}};
   }
-  js << "\n}\n";
+  std::ofstream(dir + "/summary.json") << js.dump(2) << "\n";
   std::ofstream md(dir + "/summary.md");
   md << "| run | ATE [m] | ATE posyaw [m] | ATE rot [deg] | final err [m] | final err [% of dist] | NEES pos | NEES "
         "rot "

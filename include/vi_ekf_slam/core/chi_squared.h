@@ -1,6 +1,5 @@
-// Chi-square distribution functions for gating (2 dof per observation) and NEES bands (6*M dof).
-// Hand-written because the core may only depend on Eigen and OpenCV: the regularized incomplete
-// gamma function (series / continued fraction, Numerical Recipes 6.2) and a bisection inverse.
+// Chi-square distribution functions for gating (2 dof per observation) and NEES bands (6*M dof),
+// from boost::math (header-only, within the core's dependency rule).
 #pragma once
 
 namespace vi_ekf_slam {

@@ -6,6 +6,7 @@
 
 #include <cmath>
 #include <functional>
+#include <nlohmann/json.hpp>
 #include <optional>
 #include <string>
 #include <vector>
@@ -71,6 +72,6 @@ RunMetrics evaluateRun(const std::vector<EstimatedPose>& estimates, const std::v
 
 /// summary.json / summary.md / timeseries.csv for runs keyed by name (e.g. per mechanization).
 void writeRunReport(const std::string& dir, const std::vector<std::pair<std::string, RunMetrics>>& runs,
-                    const std::string& config_json);
+                    const nlohmann::ordered_json& config);
 
 }  // namespace vi_ekf_slam::eval
