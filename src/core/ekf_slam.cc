@@ -297,30 +297,55 @@ FrameResult EkfSlam::processFrame(const CameraFrame& camera_frame) {
     r.error = "frame older than the filter state";
     return r;
   }
-  // From the samples kept for it (the caller may have propagated to the frame already).
-  const bool at_rest = imuAtRest(recent_imu_, frame.timestamp - config_.zero_velocity.still_window_s, frame.timestamp,
-                                 config_.zero_velocity);
-  // Later frames are newer: what is older than this frame's window is of no further use.
-  while (!recent_imu_.empty() &&
-         recent_imu_.front().timestamp < frame.timestamp - config_.zero_velocity.still_window_s) {
-    recent_imu_.pop_front();
-  }
+  const bool at_rest = imuAtRestBefore(frame.timestamp);
   if (!propagateTo(frame.timestamp)) {
     r.error = "IMU does not reach the frame time yet";
     return r;
   }
-  if (config_.zero_velocity.enabled) {
-    const Mat3 R_n_c = (state_.x.q_n_s * state_.x.q_s_b).toRotationMatrix() * T_b_c_.R_b_c;
-    r.stationary = stationary_.update(frame, R_n_c, camera_, config_.zero_velocity);
-    if (r.stationary.stationary)
-      r.zero_velocity_applied = zeroVelocityUpdate(state_, config_.zero_velocity, at_rest).applied;
-    if (r.zero_velocity_applied) ++zero_velocity_updates_;
-  }
+  detectStanding(frame, at_rest, &r);
   std::vector<FeatureObservation> known, fresh;
   for (const auto& f : frame.features) {
-    if (!f.uv.allFinite()) continue;
-    (state_.findLandmark(f.id) ? known : fresh).push_back(f);
+    if (f.uv.allFinite()) (state_.findLandmark(f.id) ? known : fresh).push_back(f);
   }
+  updateSeenMoving(r);
+  if (config_.zero_velocity.enabled && config_.zero_velocity.defer_landmarks && !seen_moving_ && !at_rest) {
+    r.deferred_features = static_cast<int>(fresh.size());
+    fresh.clear();  // their tracks go on and become landmarks once the rig is seen moving
+  }
+  r.update = ekfUpdate(state_, known, camera_, T_b_c_, config_.update, last_gyro_ - state_.x.b_g);
+  for (const auto& f : known) last_seen_[f.id] = frame.timestamp;
+  r.removed_ids = makeRoomInTheMap(frame.timestamp, static_cast<int>(fresh.size()));
+  r.new_ids = addLandmarks(fresh, frame.timestamp);
+  if (shouldCompose(static_cast<int>(r.new_ids.size()))) {
+    compose(state_);
+    ++compositions_;
+    r.composed = true;
+  }
+  r.lost = divergence_.update(frame.timestamp, state_, r.update.accepted,
+                              static_cast<int>(r.update.rejected_ids.size()), config_.divergence);
+  r.processed = true;
+  return r;
+}
+
+bool EkfSlam::imuAtRestBefore(double t) {
+  // From the samples kept for it (the caller may have propagated to the frame already).
+  const double from = t - config_.zero_velocity.still_window_s;
+  const bool at_rest = imuAtRest(recent_imu_, from, t, config_.zero_velocity);
+  // Later frames are newer: what is older than this frame's window is of no further use.
+  while (!recent_imu_.empty() && recent_imu_.front().timestamp < from) recent_imu_.pop_front();
+  return at_rest;
+}
+
+void EkfSlam::detectStanding(const CameraFrame& frame, bool at_rest, FrameResult* r) {
+  if (!config_.zero_velocity.enabled) return;
+  const Mat3 R_n_c = (state_.x.q_n_s * state_.x.q_s_b).toRotationMatrix() * T_b_c_.R_b_c;
+  r->stationary = stationary_.update(frame, R_n_c, camera_, config_.zero_velocity);
+  if (r->stationary.stationary)
+    r->zero_velocity_applied = zeroVelocityUpdate(state_, config_.zero_velocity, at_rest).applied;
+  if (r->zero_velocity_applied) ++zero_velocity_updates_;
+}
+
+void EkfSlam::updateSeenMoving(const FrameResult& r) {
   // "Seen moving" is latched: it ends with a stand and starts again once the parallax over the
   // detector's window reaches moving_parallax_px. Before the detector has a window (start, reset)
   // the filter's own speed decides: surely a walk's (moving_speed_mps) or not. Standing only
@@ -335,50 +360,38 @@ FrameResult EkfSlam::processFrame(const CameraFrame& camera_frame) {
              (r.stationary.decided && r.stationary.parallax_px >= config_.zero_velocity.moving_parallax_px)) {
     seen_moving_ = true;
   }
-  if (config_.zero_velocity.enabled && config_.zero_velocity.defer_landmarks && !seen_moving_ && !at_rest) {
-    r.deferred_features = static_cast<int>(fresh.size());
-    fresh.clear();  // their tracks go on and become landmarks once the rig is seen moving
-  }
-  r.update = ekfUpdate(state_, known, camera_, T_b_c_, config_.update, last_gyro_ - state_.x.b_g);
-  for (const auto& f : known) last_seen_[f.id] = frame.timestamp;
+}
 
-  // Map management: drop landmarks not seen for landmark_timeout_s, then make room for the new
-  // ones by dropping those seen longest ago (never one observed in this frame).
+std::vector<std::int64_t> EkfSlam::makeRoomInTheMap(double t, int wanted) {
+  // Drop landmarks not seen for landmark_timeout_s, then make room for the new ones by dropping
+  // those seen longest ago (never one observed in this frame).
   std::vector<std::pair<double, std::int64_t>> by_age;
-  for (const auto& [id, t] : last_seen_) by_age.emplace_back(t, id);
+  for (const auto& [id, seen] : last_seen_) by_age.emplace_back(seen, id);
   std::sort(by_age.begin(), by_age.end());
   std::vector<std::int64_t> drop;
   size_t k = 0;
   if (config_.landmark_timeout_s >= 0.0) {
-    for (; k < by_age.size() && by_age[k].first < frame.timestamp - config_.landmark_timeout_s; ++k) {
-      drop.push_back(by_age[k].second);
-    }
+    for (; k < by_age.size() && by_age[k].first < t - config_.landmark_timeout_s; ++k) drop.push_back(by_age[k].second);
   }
-  const int wanted = static_cast<int>(fresh.size());
   while (state_.numLandmarks() - static_cast<int>(drop.size()) + wanted > config_.max_landmarks && k < by_age.size() &&
-         by_age[k].first < frame.timestamp) {
+         by_age[k].first < t) {
     drop.push_back(by_age[k++].second);
   }
   removeLandmarksById(drop);
-  r.removed_ids = drop;
+  return drop;
+}
 
+std::vector<std::int64_t> EkfSlam::addLandmarks(const std::vector<FeatureObservation>& fresh, double t) {
+  std::vector<std::int64_t> added;
   const double new_depth_m = fresh.empty() ? 0.0 : newLandmarkDepth();
   for (const auto& f : fresh) {
     if (state_.numLandmarks() >= config_.max_landmarks) break;
     if (initializeLandmark(f, new_depth_m)) {
-      r.new_ids.push_back(f.id);
-      last_seen_[f.id] = frame.timestamp;
+      added.push_back(f.id);
+      last_seen_[f.id] = t;
     }
   }
-  if (shouldCompose(static_cast<int>(r.new_ids.size()))) {
-    compose(state_);
-    ++compositions_;
-    r.composed = true;
-  }
-  r.lost = divergence_.update(frame.timestamp, state_, r.update.accepted,
-                              static_cast<int>(r.update.rejected_ids.size()), config_.divergence);
-  r.processed = true;
-  return r;
+  return added;
 }
 
 bool EkfSlam::confidentlyMoving() const {
@@ -409,12 +422,6 @@ void EkfSlam::setMechanization(Mechanization m) {
     switchMechanization(state_, m);
   else
     state_ = FilterState(m);
-}
-
-void EkfSlam::composeNow() {
-  if (!initialized_ || !isSensorCentric(state_.mechanization())) return;
-  compose(state_);
-  ++compositions_;
 }
 
 }  // namespace vi_ekf_slam

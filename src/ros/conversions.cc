@@ -186,6 +186,36 @@ sensor_msgs::PointCloud2 toPointCloud(const std::vector<LandmarkOutput>& lms, co
   return c;
 }
 
+vi_ekf_slam::FilterStatus toFilterStatus(const EkfSlam& filter, const NavState& nav, const FrameResult& r,
+                                         const StatusExtras& x) {
+  vi_ekf_slam::FilterStatus s;
+  s.mechanization = toString(filter.mechanization());
+  s.landmark_init = toString(x.landmark_init);
+  s.initialized = filter.initialized();
+  s.landmarks_in_state = filter.state().numLandmarks();
+  s.tracks = x.tracks;
+  s.new_landmarks = static_cast<int>(r.new_ids.size());
+  s.deferred_features = r.deferred_features;
+  s.removed_landmarks = static_cast<int>(r.removed_ids.size());
+  s.accepted_observations = r.update.accepted;
+  s.rejected_observations = static_cast<int>(r.update.rejected_ids.size());
+  s.nis_per_dof = r.update.accepted > 0 ? r.update.nis_sum / (2.0 * r.update.accepted) : 0.0;
+  s.time_offset_s = nav.t_d;
+  s.time_offset_sigma_s = nav.t_d_sigma;
+  s.compositions = filter.compositions();
+  s.stationary = r.zero_velocity_applied;
+  s.parallax_px = r.stationary.parallax_px;
+  s.zero_velocity_updates = filter.zeroVelocityUpdates();
+  s.resets = static_cast<int>(x.resets);
+  s.update_time_ms = x.update_ms;
+  s.tracker_time_ms = x.tracker_ms;
+  const Vec3 g_b = nav.q_n_b.conjugate() * gravityInNav(x.gravity_mps2);
+  tf2::toMsg(g_b, s.gravity_body);
+  tf2::toMsg(nav.b_a, s.accel_bias);
+  tf2::toMsg(nav.b_g, s.gyro_bias);
+  return s;
+}
+
 bool allFinite(const nav_msgs::Odometry& o) {
   const auto& p = o.pose.pose;
   const auto& t = o.twist.twist;

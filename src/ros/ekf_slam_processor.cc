@@ -1,6 +1,5 @@
 #include "vi_ekf_slam/ros/ekf_slam_processor.h"
 
-#include <camera_calibration_parsers/parse.h>
 #include <chrono>
 #include <ros/console.h>
 #include <sstream>
@@ -16,31 +15,12 @@ EkfSlamProcessor::EkfSlamProcessor(const NodeParams& params, OutputSink& sink, c
     : params_(params),
       sink_(sink),
       tf_(tf),
+      calibration_(params.node),
+      clock_(params.node.time_jump_reset_s, params.filter.max_imu_gap_s),
       static_init_(params.static_init),
       frames_(params.node.publish_tf, params.node.world_frame, params.node.odom_frame, params.node.base_frame) {
   if (params_.node.tune_allocator) tuneAllocatorForLargeBuffers();
   body_frame_ = params_.node.body_frame;  // "": from the first IMU message
-  if (params_.node.extrinsic_source == "parameters") {
-    const auto& v = params_.node.T_b_c;
-    CameraExtrinsics T;
-    T.p_b_c = Vec3(v[0], v[1], v[2]);
-    T.R_b_c = Quat(v[6], v[3], v[4], v[5]).normalized().toRotationMatrix();
-    extrinsics_ = T;
-  }
-  if (!params_.node.camera_calibration_file.empty()) {
-    std::string name;
-    sensor_msgs::CameraInfo info;
-    CameraIntrinsics in;
-    if (!camera_calibration_parsers::readCalibration(params_.node.camera_calibration_file, name, info)) {
-      throw std::invalid_argument("vi_ekf_slam: cannot read camera_calibration_file '" +
-                                  params_.node.camera_calibration_file + "'");
-    }
-    const std::string e = intrinsicsFromCameraInfo(info, &in);
-    if (!e.empty()) throw std::invalid_argument("vi_ekf_slam: camera_calibration_file: " + e);
-    intrinsics_ = in;
-    ROS_INFO("vi_ekf_slam: camera calibration from %s (%dx%d), used until camera_info arrives",
-             params_.node.camera_calibration_file.c_str(), in.width, in.height);
-  }
 }
 
 void EkfSlamProcessor::reportProblem(const std::string& what) {
@@ -59,7 +39,8 @@ void EkfSlamProcessor::reset(const std::string& reason) {
   queue_.clear();
   births_.clear();
   prev_q_n_b_.reset();
-  last_imu_t_ = last_image_t_ = last_processed_t_ = -1e300;
+  clock_.reset();
+  last_processed_t_.reset();
   frames_.filterRestarted();
   ++counters_.resets;
   sink_.event("reset: " + reason);
@@ -85,19 +66,14 @@ std::string EkfSlamProcessor::reconfigure(const EkfSlamReconfigureConfig& config
 }
 
 void EkfSlamProcessor::cameraInfo(const sensor_msgs::CameraInfo& msg) {
-  CameraIntrinsics in;
-  const std::string err = intrinsicsFromCameraInfo(msg, &in);
+  bool changed = false;
+  const std::string err = calibration_.cameraInfo(msg, &changed);
   if (!err.empty()) {
     ++counters_.camera_info_invalid;
     reportProblem("camera_info ignored: " + err);
     return;
   }
-  const bool changed = !intrinsics_ || in.fx != intrinsics_->fx || in.fy != intrinsics_->fy ||
-                       in.cx != intrinsics_->cx || in.cy != intrinsics_->cy || in.width != intrinsics_->width ||
-                       in.height != intrinsics_->height || in.distortion != intrinsics_->distortion ||
-                       in.model != intrinsics_->model;
-  if (!changed) return;
-  if (filter_) {
+  if (changed && filter_) {
     // A new calibration invalidates the map and the tracks: start over.
     filter_.reset();
     tracker_.reset();
@@ -106,48 +82,22 @@ void EkfSlamProcessor::cameraInfo(const sensor_msgs::CameraInfo& msg) {
     ++counters_.resets;
     sink_.event("reset: camera calibration changed");
   }
-  intrinsics_ = in;
-  ROS_INFO("vi_ekf_slam: camera %dx%d fx=%.1f fy=%.1f from camera_info", in.width, in.height, in.fx, in.fy);
 }
 
 bool EkfSlamProcessor::cameraReady(const std::string& image_frame) {
-  if (!intrinsics_) {
-    reportProblem("no valid camera_info (and no camera_calibration_file) yet");
+  const std::string missing = calibration_.ready(image_frame, body_frame_, tf_);
+  if (!missing.empty()) {
+    reportProblem(missing);
     return false;
-  }
-  if (!extrinsics_) {
-    if (image_frame.empty()) {
-      reportProblem("image has no frame_id: cannot look up the camera-IMU transform");
-      return false;
-    }
-    if (body_frame_.empty()) {
-      reportProblem("waiting for IMU messages (their frame_id is the IMU frame of the camera-IMU transform)");
-      return false;
-    }
-    if (image_frame == body_frame_) {
-      extrinsics_ = CameraExtrinsics();
-    } else if (!tf_) {
-      reportProblem("no TF available for the camera-IMU transform");
-      return false;
-    } else {
-      try {
-        const auto t = tf_->lookupTransform(body_frame_, image_frame, ros::Time(0));
-        extrinsics_ = extrinsicsFromTransform(t.transform);
-        ROS_INFO("vi_ekf_slam: camera-IMU transform %s <- %s from TF", body_frame_.c_str(), image_frame.c_str());
-      } catch (const tf2::TransformException& e) {
-        reportProblem("waiting for TF " + body_frame_ + " <- " + image_frame + ": " + e.what());
-        return false;
-      }
-    }
   }
   if (!filter_) {
     try {
       // Tracker and filter share the camera of the tracked (possibly shrunk) image.
-      const CameraModel camera(trackingIntrinsics(*intrinsics_, params_.tracker.max_image_width_px));
-      filter_ = std::make_unique<EkfSlam>(params_.filter, camera, *extrinsics_);
+      const CameraModel camera(trackingIntrinsics(calibration_.intrinsics(), params_.tracker.max_image_width_px));
+      filter_ = std::make_unique<EkfSlam>(params_.filter, camera, calibration_.extrinsics());
       tracker_ = std::make_unique<FeatureTracker>(camera, params_.tracker);
       dynamic_init_ = std::make_unique<DynamicInitializer>(withFilterSettings(params_.dynamic_init, params_.filter),
-                                                           camera, *extrinsics_);
+                                                           camera, calibration_.extrinsics());
     } catch (const std::exception& e) {
       reportProblem(std::string("cannot start the filter: ") + e.what());
       filter_.reset();
@@ -188,27 +138,23 @@ void EkfSlamProcessor::imu(const sensor_msgs::Imu& msg) {
     reportProblem("IMU sample with NaN/Inf dropped");
     return;
   }
-  if (d->timestamp <= last_imu_t_) {
-    if (last_imu_t_ - d->timestamp > params_.node.time_jump_reset_s) {
-      reset("IMU time jumped back by " + std::to_string(last_imu_t_ - d->timestamp) + " s");
-      frames_.forget();  // a new recording (or a looped bag): odom starts over too
-    } else {
+  switch (clock_.imu(d->timestamp)) {
+    case StampVerdict::kStale:
       ++counters_.imu_stale;
       reportProblem("IMU sample not newer than the previous one dropped");
       return;
-    }
+    case StampVerdict::kJumpedBack:
+      reset("IMU time jumped back by " + std::to_string(clock_.lastStepBack()) + " s");
+      frames_.forget();  // a new recording (or a looped bag): odom starts over too
+      clock_.imu(d->timestamp);
+      break;
+    case StampVerdict::kNext:
+      break;
   }
-  if (last_imu_t_ > -1e299 && d->timestamp - last_imu_t_ > params_.filter.max_imu_gap_s) {
+  if (const auto gap = clock_.lastImuGap()) {
     ++counters_.imu_gaps;
-    reportProblem("IMU gap of " + std::to_string(d->timestamp - last_imu_t_) + " s");
+    reportProblem("IMU gap of " + std::to_string(*gap) + " s");
   }
-  if (last_imu_t_ > -1e299) {
-    const double dt = d->timestamp - last_imu_t_;
-    if (dt > 0.0 && dt <= params_.filter.max_imu_gap_s) {
-      imu_period_s_ = imu_period_s_ > 0.0 ? 0.99 * imu_period_s_ + 0.01 * dt : dt;
-    }
-  }
-  last_imu_t_ = d->timestamp;
   last_gyro_ = d->wm;
   if (body_frame_.empty()) {
     body_frame_ = !msg.header.frame_id.empty() ? msg.header.frame_id : "imu";
@@ -228,17 +174,19 @@ void EkfSlamProcessor::imu(const sensor_msgs::Imu& msg) {
 void EkfSlamProcessor::image(const sensor_msgs::Image& msg) {
   ++counters_.images_received;
   const double t = msg.header.stamp.toSec();  // camera clock; the filter maps it to the IMU clock
-  if (t <= last_image_t_) {
-    if (last_image_t_ - t > params_.node.time_jump_reset_s) {
-      reset("image time jumped back by " + std::to_string(last_image_t_ - t) + " s");
-      frames_.forget();
-    } else {
+  switch (clock_.image(t)) {
+    case StampVerdict::kStale:
       ++counters_.images_stale;
       reportProblem("image not newer than the previous one dropped");
       return;
-    }
+    case StampVerdict::kJumpedBack:
+      reset("image time jumped back by " + std::to_string(clock_.lastStepBack()) + " s");
+      frames_.forget();
+      clock_.image(t);
+      break;
+    case StampVerdict::kNext:
+      break;
   }
-  last_image_t_ = t;
   PendingImage img{t, msg.header, cv::Mat()};
   const std::string err = toMono8(msg, &img.mono);
   if (!err.empty()) {
@@ -250,11 +198,11 @@ void EkfSlamProcessor::image(const sensor_msgs::Image& msg) {
     ++counters_.images_no_camera;
     return;
   }
-  if (img.mono.cols != intrinsics_->width || img.mono.rows != intrinsics_->height) {
+  const CameraIntrinsics& k = calibration_.intrinsics();
+  if (img.mono.cols != k.width || img.mono.rows != k.height) {
     ++counters_.images_no_camera;
     reportProblem("image size " + std::to_string(img.mono.cols) + "x" + std::to_string(img.mono.rows) +
-                  " differs from the calibration " + std::to_string(intrinsics_->width) + "x" +
-                  std::to_string(intrinsics_->height));
+                  " differs from the calibration " + std::to_string(k.width) + "x" + std::to_string(k.height));
     return;
   }
   if (!filter_->initialized()) {
@@ -344,22 +292,21 @@ void EkfSlamProcessor::processImage(PendingImage& img) {
   std::optional<Eigen::Matrix3d> R_cur_prev;
   if (prev_q_n_b_) {
     const Mat3 R_b = (q_now.conjugate() * *prev_q_n_b_).toRotationMatrix();
-    const Mat3& R_b_c = extrinsics_->R_b_c;
+    const Mat3& R_b_c = calibration_.extrinsics().R_b_c;
     R_cur_prev = R_b_c.transpose() * R_b * R_b_c;
   }
   const CameraFrame frame = trackImage(img, R_cur_prev);
   const FrameResult r = filter_->processFrame(frame);
   last_update_ms_ = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - tic).count();
-  total_processing_ms_ += last_update_ms_;
   if (!r.processed) {
     reportProblem("frame not processed: " + r.error);
     return;
   }
   ++counters_.images_processed;
   counters_.rejected_observations += static_cast<long>(r.update.rejected_ids.size());
-  if (img.t - last_processed_t_ > params_.node.max_image_gap_s && last_processed_t_ > -1e299) {
+  if (last_processed_t_ && img.t - *last_processed_t_ > params_.node.max_image_gap_s) {
     ++counters_.image_gaps;
-    reportProblem("no image for " + std::to_string(img.t - last_processed_t_) + " s");
+    reportProblem("no image for " + std::to_string(img.t - *last_processed_t_) + " s");
   }
   last_processed_t_ = img.t;
   if (frame.features.empty()) {
@@ -420,46 +367,23 @@ void EkfSlamProcessor::output(const PendingImage& img, const CameraFrame& frame,
   }
   // The image's own header (stamp and camera frame), so that it overlays its source image.
   if (sink_.wantsTracksImage()) sink_.tracksImage(img.header, tracker_->drawTracks(img.mono));
-  vi_ekf_slam::FilterStatus s;
+  StatusExtras x;
+  x.landmark_init = params_.filter.landmark_init;
+  x.tracks = last_tracks_;
+  x.resets = counters_.resets;
+  x.update_ms = last_update_ms_;
+  x.tracker_ms = last_tracker_ms_;
+  x.gravity_mps2 = params_.filter.gravity_mps2;
+  vi_ekf_slam::FilterStatus s = toFilterStatus(*filter_, nav, r, x);
   s.header.stamp = stamp;
   s.header.frame_id = frames_.fixedFrame();
-  s.mechanization = toString(filter_->mechanization());
-  s.landmark_init = toString(params_.filter.landmark_init);
-  s.initialized = filter_->initialized();
-  s.landmarks_in_state = filter_->state().numLandmarks();
-  s.tracks = last_tracks_;
-  s.new_landmarks = static_cast<int>(r.new_ids.size());
-  s.deferred_features = r.deferred_features;
-  s.removed_landmarks = static_cast<int>(r.removed_ids.size());
-  s.accepted_observations = r.update.accepted;
-  s.rejected_observations = static_cast<int>(r.update.rejected_ids.size());
-  s.nis_per_dof = r.update.accepted > 0 ? r.update.nis_sum / (2.0 * r.update.accepted) : 0.0;
-  s.time_offset_s = nav.t_d;
-  s.time_offset_sigma_s = nav.t_d_sigma;
-  s.compositions = filter_->compositions();
-  s.stationary = r.zero_velocity_applied;
-  s.parallax_px = r.stationary.parallax_px;
-  s.zero_velocity_updates = filter_->zeroVelocityUpdates();
-  s.resets = static_cast<int>(counters_.resets);
-  s.update_time_ms = last_update_ms_;
-  s.tracker_time_ms = last_tracker_ms_;
-  const Vec3 g_b = nav.q_n_b.conjugate() * gravityInNav(params_.filter.gravity_mps2);
-  s.gravity_body.x = g_b.x();
-  s.gravity_body.y = g_b.y();
-  s.gravity_body.z = g_b.z();
-  s.accel_bias.x = nav.b_a.x();
-  s.accel_bias.y = nav.b_a.y();
-  s.accel_bias.z = nav.b_a.z();
-  s.gyro_bias.x = nav.b_g.x();
-  s.gyro_bias.y = nav.b_g.y();
-  s.gyro_bias.z = nav.b_g.z();
   sink_.status(s);
 }
 
 double EkfSlamProcessor::angularRateVariance() const {
   // The angular velocity published is one gyro sample: its variance is the noise density^2 times
   // the IMU's rate (measured; 200 Hz until known).
-  const double rate_hz = imu_period_s_ > 0.0 ? 1.0 / imu_period_s_ : 200.0;
+  const double rate_hz = clock_.imuPeriod() ? 1.0 / *clock_.imuPeriod() : 200.0;
   return params_.filter.imu_noise.gyro_noise_density * params_.filter.imu_noise.gyro_noise_density * rate_hz;
 }
 

@@ -83,8 +83,6 @@ class EkfSlam {
   /// Converts the running filter to another mechanization, keeping the map.
   void setMechanization(Mechanization m);
   Mechanization mechanization() const { return state_.mechanization(); }
-  /// Runs the composition step now (sensor-centric only).
-  void composeNow();
 
   NavState navState() const { return vi_ekf_slam::navState(state_); }
   /// The state propagated through the IMU samples buffered past it, to the latest one (an
@@ -93,7 +91,6 @@ class EkfSlam {
   std::optional<NavState> predictedNavState(Vec3* angular_rate = nullptr) const;
   std::vector<NavLandmark> landmarks() const { return navLandmarks(state_); }
   const FilterState& state() const { return state_; }
-  FilterState& mutableState() { return state_; }
 
   int compositions() const { return compositions_; }
   int imuGaps() const { return imu_gaps_; }
@@ -101,6 +98,19 @@ class EkfSlam {
   int zeroVelocityUpdates() const { return zero_velocity_updates_; }
 
  private:
+  // The steps of processFrame, in order.
+  /// Whether the IMU showed the rig at rest over the still window before t (and drops the samples
+  /// before that window).
+  bool imuAtRestBefore(double t);
+  /// Standing (no translation parallax): the zero-velocity update.
+  void detectStanding(const CameraFrame& frame, bool at_rest, FrameResult* r);
+  /// The latched "seen moving" that lets new tracks become landmarks.
+  void updateSeenMoving(const FrameResult& r);
+  /// Removes timed-out landmarks and, for `wanted` new ones, the longest unseen; returns their ids.
+  std::vector<std::int64_t> makeRoomInTheMap(double t, int wanted);
+  /// New landmarks from the fresh tracks (up to max_landmarks); returns their ids.
+  std::vector<std::int64_t> addLandmarks(const std::vector<FeatureObservation>& fresh, double t);
+
   void removeLandmarksById(const std::vector<std::int64_t>& ids);
   bool initializeLandmark(const FeatureObservation& obs, double inverse_depth_initial_m);
   /// Prior depth of new inverse-depth landmarks [m] (see inverse_depth_scene_prior).

@@ -13,7 +13,9 @@
 #include <string>
 #include <vector>
 
+#include "vi_ekf_slam/FilterStatus.h"
 #include "vi_ekf_slam/core/camera_model.h"
+#include "vi_ekf_slam/core/ekf_slam.h"
 #include "vi_ekf_slam/core/measurement_model.h"
 #include "vi_ekf_slam/core/navigation_output.h"
 #include "vi_ekf_slam/core/types.h"
@@ -47,6 +49,18 @@ nav_msgs::Odometry toOdometry(const NavState& nav, const Eigen::Vector3d& w_b, d
 struct LandmarkOutput;
 sensor_msgs::PointCloud2 toPointCloud(const std::vector<LandmarkOutput>& landmarks, const ros::Time& stamp,
                                       const std::string& frame, const Eigen::Isometry3d& T_frame_world);
+
+/// What the per-image status says besides the filter's own state.
+struct StatusExtras {
+  LandmarkInitMethod landmark_init = LandmarkInitMethod::kInverseDepth;
+  int tracks = 0;
+  long resets = 0;
+  double update_ms = 0.0, tracker_ms = 0.0;  ///< time for the image, and the tracker's part of it [ms]
+  double gravity_mps2 = 9.81;
+};
+/// The status of one processed image (header left empty for the caller).
+vi_ekf_slam::FilterStatus toFilterStatus(const EkfSlam& filter, const NavState& nav, const FrameResult& r,
+                                         const StatusExtras& x);
 
 /// True if every number of the pose, twist and covariances is finite.
 bool allFinite(const nav_msgs::Odometry& odom);

@@ -20,6 +20,8 @@
 #include "vi_ekf_slam/core/feature_tracker.h"
 #include "vi_ekf_slam/core/dynamic_initializer.h"
 #include "vi_ekf_slam/core/static_initializer.h"
+#include "vi_ekf_slam/ros/calibration_source.h"
+#include "vi_ekf_slam/ros/input_clock.h"
 #include "vi_ekf_slam/ros/output_frames.h"
 #include "vi_ekf_slam/ros/params.h"
 #include <nav_msgs/Odometry.h>
@@ -89,8 +91,6 @@ class EkfSlamProcessor {
   const EkfSlam* filter() const { return filter_.get(); }
   int lastTracks() const { return last_tracks_; }
   double lastUpdateMs() const { return last_update_ms_; }
-  /// Sum of the wall time spent processing images [ms] (for real-time factors).
-  double totalProcessingMs() const { return total_processing_ms_; }
 
  private:
   struct PendingImage {
@@ -123,8 +123,8 @@ class EkfSlamProcessor {
   NodeParams params_;
   OutputSink& sink_;
   const tf2::BufferCore* tf_;
-  std::optional<CameraIntrinsics> intrinsics_;
-  std::optional<CameraExtrinsics> extrinsics_;
+  CalibrationSource calibration_;
+  InputClock clock_;
   std::unique_ptr<EkfSlam> filter_;
   std::unique_ptr<FeatureTracker> tracker_;
   std::unique_ptr<DynamicInitializer> dynamic_init_;
@@ -133,14 +133,12 @@ class EkfSlamProcessor {
   std::optional<StaticInitResult> static_result_;
   std::deque<PendingImage> queue_;
   std::unordered_map<std::int64_t, Birth> births_;
-  double last_imu_t_ = -1e300, last_image_t_ = -1e300;
-  double imu_period_s_ = 0.0;  ///< the IMU's sample interval, averaged (0: not yet known) [s]
   Vec3 last_gyro_ = Vec3::Zero();
   std::optional<Quat> prev_q_n_b_;
-  double last_processed_t_ = -1e300;  ///< stamp of the last processed image [s]
+  std::optional<double> last_processed_t_;  ///< stamp of the last processed image [s]
   InputCounters counters_;
   int last_tracks_ = 0;
-  double last_update_ms_ = 0.0, last_tracker_ms_ = 0.0, total_processing_ms_ = 0.0;
+  double last_update_ms_ = 0.0, last_tracker_ms_ = 0.0;
   std::string last_problem_, last_lost_;
   std::string body_frame_;  ///< see bodyFrame()
   OutputFrames frames_;
