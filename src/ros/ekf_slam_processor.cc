@@ -23,6 +23,18 @@ EkfSlamProcessor::EkfSlamProcessor(const NodeParams& params, OutputSink& sink, c
   body_frame_ = params_.node.body_frame;  // "": from the first IMU message
 }
 
+std::pair<int, std::string> EkfSlamProcessor::inputsHealth() const {
+  const InputCounters& c = counters_;
+  if (c.imu_received == 0 || c.images_received == 0) {
+    return {1, c.imu_received == 0 ? "no IMU received" : "no image received"};
+  }
+  if (c.images_bad_encoding > 0 || c.camera_info_invalid > 0 || c.images_no_camera > 0) return {2, last_problem_};
+  if (c.imu_nonfinite + c.imu_stale + c.imu_gaps + c.images_stale + c.images_late + c.images_queue_dropped > 0) {
+    return {1, last_problem_};
+  }
+  return {0, "inputs ok"};
+}
+
 void EkfSlamProcessor::reportProblem(const std::string& what) {
   if (what != last_problem_) ROS_WARN_STREAM_THROTTLE(1.0, "vi_ekf_slam: " << what);
   last_problem_ = what;

@@ -162,17 +162,8 @@ void EkfSlamRos::diagnosticsTimer(const ros::TimerEvent& ev) {
 
 void EkfSlamRos::diagnoseInputs(diagnostic_updater::DiagnosticStatusWrapper& stat) {
   const InputCounters& c = processor_->counters();
-  const std::string& last = processor_->lastProblem();
-  using diagnostic_msgs::DiagnosticStatus;
-  if (c.imu_received == 0 || c.images_received == 0) {
-    stat.summary(DiagnosticStatus::WARN, c.imu_received == 0 ? "no IMU received" : "no image received");
-  } else if (c.images_bad_encoding > 0 || c.camera_info_invalid > 0 || c.images_no_camera > 0) {
-    stat.summary(DiagnosticStatus::ERROR, last);
-  } else if (c.imu_nonfinite + c.imu_stale + c.imu_gaps + c.images_stale + c.images_late + c.images_queue_dropped > 0) {
-    stat.summary(DiagnosticStatus::WARN, last);
-  } else {
-    stat.summary(DiagnosticStatus::OK, "inputs ok");
-  }
+  const auto [level, summary] = processor_->inputsHealth();
+  stat.summary(static_cast<unsigned char>(level), summary);
   stat.add("imu rate [Hz]", imu_rate_hz_);
   stat.add("image rate [Hz]", image_rate_hz_);
   stat.add("imu received", c.imu_received);
@@ -191,7 +182,7 @@ void EkfSlamRos::diagnoseInputs(diagnostic_updater::DiagnosticStatusWrapper& sta
   stat.add("image gaps", c.image_gaps);
   stat.add("images without features", c.images_without_features);
   stat.add("outlier bursts", c.outlier_bursts);
-  stat.add("last problem", last);
+  stat.add("last problem", processor_->lastProblem());
 }
 
 void EkfSlamRos::diagnoseFilter(diagnostic_updater::DiagnosticStatusWrapper& stat) {

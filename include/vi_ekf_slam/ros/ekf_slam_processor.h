@@ -82,6 +82,9 @@ class EkfSlamProcessor {
   const NodeParams& params() const { return params_; }
   const InputCounters& counters() const { return counters_; }
   const std::string& lastProblem() const { return last_problem_; }
+  /// The inputs' health for the diagnostics: level (diagnostic_msgs::DiagnosticStatus OK 0, WARN 1,
+  /// ERROR 2: nothing usable arrives) and its summary.
+  std::pair<int, std::string> inputsHealth() const;
   /// The IMU frame: body_frame, or the frame_id of the first IMU message ("" before it).
   const std::string& bodyFrame() const { return body_frame_; }
   /// The frames of the outputs (odom or world) and the filter's world in them.
