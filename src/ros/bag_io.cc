@@ -20,9 +20,9 @@ RigBagWriter::RigBagWriter(const std::string& path, const RigTopics& topics, con
                            const ros::Time& start)
     : topics_(topics), camera_(camera) {
   bag_.open(path, rosbag::bagmode::Write);
-  // Uncompressed, as `rosbag record` writes by default: LZ4 shrank the rendered hallway bag by
-  // 1.2% (its images are textured noise) but cost ~0.9 ms per image to read back (checksum
-  // and decompression), a sixth of the offline pipeline's time per image.
+  // Uncompressed, as `rosbag record` writes by default: LZ4 hardly shrinks the rendered images
+  // (textured noise) but reading them back (checksum and decompression) cost a large share of
+  // the offline pipeline's time per image (bench/README.md).
   bag_.setCompression(rosbag::compression::Uncompressed);
   // Per-sample variance of white noise of density sigma sampled at rate f: sigma^2 * f.
   gyro_var_ = noise.gyro_noise_density * noise.gyro_noise_density * imu_rate_hz;

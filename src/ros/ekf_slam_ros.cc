@@ -29,6 +29,15 @@ EkfSlamRos::EkfSlamRos(ros::NodeHandle nh, ros::NodeHandle pnh) : nh_(nh), pnh_(
 
   updater_.setHardwareID("vi_ekf_slam");
   updater_.add("inputs", this, &EkfSlamRos::diagnoseInputs);
+  imu_rate_min_hz_ = params.node.min_imu_rate_hz;
+  image_rate_min_hz_ = params.node.min_image_rate_hz;
+  using diagnostic_updater::FrequencyStatusParam;
+  imu_rate_ = std::make_unique<diagnostic_updater::FrequencyStatus>(
+      FrequencyStatusParam(&imu_rate_min_hz_, &no_max_hz_, 0.1, 5), "imu rate");
+  image_rate_ = std::make_unique<diagnostic_updater::FrequencyStatus>(
+      FrequencyStatusParam(&image_rate_min_hz_, &no_max_hz_, 0.1, 5), "image rate");
+  updater_.add(*imu_rate_);
+  updater_.add(*image_rate_);
   updater_.add("filter", this, &EkfSlamRos::diagnoseFilter);
   odom_pub_ = nh_.advertise<nav_msgs::Odometry>("odom", 50);
   odom_imu_pub_ = nh_.advertise<nav_msgs::Odometry>("odom_imu", 200);
@@ -71,7 +80,7 @@ EkfSlamRos::EkfSlamRos(ros::NodeHandle nh, ros::NodeHandle pnh) : nh_(nh), pnh_(
       "imu", 2000,
       [this](const sensor_msgs::ImuConstPtr& m) {
         std::lock_guard<std::mutex> lock(mutex_);
-        ++rate_imu_count_;
+        imu_rate_->tick();
         processor_->imu(*m);
       },
       ros::VoidConstPtr(), ros::TransportHints().tcpNoDelay());
@@ -86,7 +95,7 @@ EkfSlamRos::EkfSlamRos(ros::NodeHandle nh, ros::NodeHandle pnh) : nh_(nh), pnh_(
       nh_.resolveName("image"), 5,
       [this](const sensor_msgs::ImageConstPtr& m) {
         std::lock_guard<std::mutex> lock(mutex_);
-        ++rate_image_count_;
+        image_rate_->tick();
         processor_->image(*m);
       },
       ros::VoidPtr(), imageTransportHints());
@@ -147,16 +156,8 @@ void EkfSlamRos::event(const std::string& text) {
   }
 }
 
-void EkfSlamRos::diagnosticsTimer(const ros::TimerEvent& ev) {
+void EkfSlamRos::diagnosticsTimer(const ros::TimerEvent&) {
   std::lock_guard<std::mutex> lock(mutex_);
-  const double now = ev.current_real.toSec();
-  if (rate_window_start_ <= 0.0) rate_window_start_ = now;
-  if (now - rate_window_start_ >= 1.0) {
-    imu_rate_hz_ = rate_imu_count_ / (now - rate_window_start_);
-    image_rate_hz_ = rate_image_count_ / (now - rate_window_start_);
-    rate_imu_count_ = rate_image_count_ = 0;
-    rate_window_start_ = now;
-  }
   updater_.update();
 }
 
@@ -164,8 +165,6 @@ void EkfSlamRos::diagnoseInputs(diagnostic_updater::DiagnosticStatusWrapper& sta
   const InputCounters& c = processor_->counters();
   const auto [level, summary] = processor_->inputsHealth();
   stat.summary(static_cast<unsigned char>(level), summary);
-  stat.add("imu rate [Hz]", imu_rate_hz_);
-  stat.add("image rate [Hz]", image_rate_hz_);
   stat.add("imu received", c.imu_received);
   stat.add("imu dropped: non-finite", c.imu_nonfinite);
   stat.add("imu dropped: stale stamp", c.imu_stale);

@@ -260,6 +260,10 @@ std::vector<ParamSpec> makeTable() {
             false, 1, 1000000),
       field("max_image_gap_s", "outputs", VI_FIELD(p.node.max_image_gap_s), "s",
             "longer gaps between processed images are reported in the diagnostics", false, 0.001, 1e6),
+      field("min_imu_rate_hz", "outputs", VI_FIELD(p.node.min_imu_rate_hz), "Hz",
+            "the diagnostics (\"imu rate\") warn while the IMU arrives slower than this", false, 0.0, 10000.0),
+      field("min_image_rate_hz", "outputs", VI_FIELD(p.node.min_image_rate_hz), "Hz",
+            "the diagnostics (\"image rate\") warn while images arrive slower than this", false, 0.0, 1000.0),
   };
 }
 

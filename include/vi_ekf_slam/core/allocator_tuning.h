@@ -3,9 +3,9 @@
 // Every image allocates a few buffers of 0.3-2 MB (pyramids, corner scores) and every change of
 // the map size allocates a new covariance (12 MB at 400 landmarks). Above glibc's mmap
 // threshold each of those is a fresh mmap whose pages fault in one by one and are unmapped again
-// when freed; on a virtual machine that was two thirds of the offline pipeline's time
-// (24.9 -> 7.4 ms per frame on the hallway bag, LandmarkInit at N = 400: 34 -> 0.42 ms). Keeping
-// such blocks in the heap (and not trimming it eagerly) makes their memory reused instead.
+// when freed; on a virtual machine that was most of the offline pipeline's time (bench/README.md
+// has the numbers). Keeping such blocks in the heap (and not trimming it eagerly) makes their
+// memory reused instead.
 #pragma once
 
 namespace vi_ekf_slam {

@@ -31,7 +31,7 @@ struct TrackerParams {
   int border_px = 8;                 ///< corners this close to the border are dropped [px]
   /// New corners are searched only once the tracks fall below this fraction of max_tracks
   /// [ratio]; 1 searches in every image that lost a track. The search is most of the tracker's
-  /// time: 0.9 cut tracking by 27-39% on the hallway bags, with 4% fewer tracks (bench/README.md).
+  /// time: a lower value trades a few tracks for much of it (bench/README.md).
   double redetect_fraction = 1.0;
   /// Images wider than this are shrunk to this width before tracking [px]; 0 tracks at full
   /// size. Every pixel quantity of the tracker and of the filter (thresholds, pixel noise,

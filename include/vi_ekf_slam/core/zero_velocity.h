@@ -25,14 +25,14 @@ struct ZeroVelocityParams {
   double max_parallax_px = 3.0;
   int min_features = 10;  ///< features seen at both ends of the window to decide at all
   /// Std-dev of the true velocity while standing (torso sway) [m/s]: the noise of the
-  /// zero-velocity pseudo-measurement. A standing pedestrian or hand-held rig sways at 0.03-0.09
-  /// m/s rms (TUM corridor start), and the sway is correlated over a few tenths of a second while
-  /// the update is applied at the frame rate as if each frame's sway were independent; 0.03 made
-  /// the gyro bias and velocity overconfident at the corridor's start (gyro z NEES 29 instead of 1).
+  /// zero-velocity pseudo-measurement. A standing pedestrian or hand-held rig sways by a few
+  /// centimetres per second, and the sway is correlated over a few tenths of a second while the
+  /// update is applied at the frame rate as if each frame's sway were independent: a smaller value
+  /// made the gyro bias and velocity overconfident at the TUM corridor's start (docs/study.md).
   double velocity_sigma_mps = 0.08;
   /// The same while the IMU shows the rig at rest as well (imuAtRest: accelerometer std-dev below
   /// 0.2 m/s^2 over 0.1 s allows ~0.02 m/s of motion) [m/s]: a rig set down, a pedestrian leaning
-  /// on a wall. The rendered demo bag starts so: 0.08 there cost world-centric 0.30 -> 0.42 m ATE.
+  /// on a wall. The rendered demo bag starts so (docs/study.md measures the difference).
   double rest_velocity_sigma_mps = 0.03;
   double gate_probability = 0.999;  ///< chi^2 gate (3 dof): a moving filter refuses the update
   /// A point first seen while the rig stands (or before the detector's first window, when

@@ -5,6 +5,7 @@
 #pragma once
 
 #include <diagnostic_updater/diagnostic_updater.h>
+#include <diagnostic_updater/update_functions.h>
 #include <dynamic_reconfigure/server.h>
 #include <image_transport/image_transport.h>
 #include <memory>
@@ -47,6 +48,11 @@ class EkfSlamRos : public OutputSink {
   void diagnoseFilter(diagnostic_updater::DiagnosticStatusWrapper& stat);
 
   std::mutex mutex_;  ///< serializes callbacks (a nodelet manager may run them on several threads)
+  // The input rates' diagnostics (WARN below min_imu_rate_hz / min_image_rate_hz); the bounds
+  // are read by FrequencyStatus through these pointers. Declared before the subscribers and the
+  // updater that use them, so they are destroyed after those.
+  double imu_rate_min_hz_ = 0.0, image_rate_min_hz_ = 0.0, no_max_hz_ = 1e9;
+  std::unique_ptr<diagnostic_updater::FrequencyStatus> imu_rate_, image_rate_;
   ros::NodeHandle nh_, pnh_;
   tf2_ros::Buffer tf_buffer_;
   std::unique_ptr<tf2_ros::TransformListener> tf_listener_;
@@ -64,9 +70,6 @@ class EkfSlamRos : public OutputSink {
   diagnostic_updater::Updater updater_;
   boost::recursive_mutex reconfigure_mutex_;
   std::unique_ptr<dynamic_reconfigure::Server<EkfSlamReconfigureConfig>> reconfigure_;
-  double rate_window_start_ = 0.0;
-  long rate_imu_count_ = 0, rate_image_count_ = 0;
-  double imu_rate_hz_ = 0.0, image_rate_hz_ = 0.0;
 };
 
 }  // namespace vi_ekf_slam::glue

@@ -36,6 +36,8 @@ struct NodeOptions {
   double time_jump_reset_s = 1.0;                     ///< a stamp this far backwards resets the filter [s]
   int path_max_length = 2000;                         ///< poses kept in the published path
   double max_image_gap_s = 0.5;                       ///< longer gaps between processed images are reported [s]
+  double min_imu_rate_hz = 100.0;                     ///< the diagnostics warn below this IMU rate [Hz]
+  double min_image_rate_hz = 5.0;                     ///< the diagnostics warn below this image rate [Hz]
 };
 
 struct NodeParams {
