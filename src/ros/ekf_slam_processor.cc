@@ -17,7 +17,7 @@ EkfSlamProcessor::EkfSlamProcessor(const NodeParams& params, OutputSink& sink, c
       tf_(tf),
       calibration_(params.node),
       clock_(params.node.time_jump_reset_s, params.filter.max_imu_gap_s),
-      static_init_(params.static_init),
+      start_(params),
       frames_(params.node.publish_tf, params.node.world_frame, params.node.odom_frame, params.node.base_frame) {
   if (params_.node.tune_allocator) tuneAllocatorForLargeBuffers();
   body_frame_ = params_.node.body_frame;  // "": from the first IMU message
@@ -44,10 +44,7 @@ void EkfSlamProcessor::reset(const std::string& reason) {
   ROS_WARN_STREAM("vi_ekf_slam: reset: " << reason);
   if (filter_) filter_->reset();
   if (tracker_) tracker_->reset();
-  static_init_.reset();
-  static_result_.reset();
-  if (dynamic_init_) dynamic_init_->reset();
-  first_uninitialized_image_t_.reset();
+  start_.reset();
   queue_.clear();
   births_.clear();
   prev_q_n_b_.reset();
@@ -108,8 +105,7 @@ bool EkfSlamProcessor::cameraReady(const std::string& image_frame) {
       const CameraModel camera(trackingIntrinsics(calibration_.intrinsics(), params_.tracker.max_image_width_px));
       filter_ = std::make_unique<EkfSlam>(params_.filter, camera, calibration_.extrinsics());
       tracker_ = std::make_unique<FeatureTracker>(camera, params_.tracker);
-      dynamic_init_ = std::make_unique<DynamicInitializer>(withFilterSettings(params_.dynamic_init, params_.filter),
-                                                           camera, calibration_.extrinsics());
+      start_.setCamera(camera, calibration_.extrinsics());
     } catch (const std::exception& e) {
       reportProblem(std::string("cannot start the filter: ") + e.what());
       filter_.reset();
@@ -120,26 +116,14 @@ bool EkfSlamProcessor::cameraReady(const std::string& image_frame) {
 }
 
 void EkfSlamProcessor::tryInitialize(double t_now) {
-  if (!filter_ || filter_->initialized() || !static_result_) return;
-  // Only a recent static interval: if the rig moved since, wait for the next one.
-  if (t_now - static_result_->timestamp > 0.5) return;
-  NavState init;
-  init.timestamp = static_result_->timestamp;
-  init.q_n_b = static_result_->q_n_b;
-  init.b_g = static_result_->b_g;
-  init.b_a = static_result_->b_a;
-  filter_->initialize(init);
+  if (!filter_ || filter_->initialized()) return;
+  const std::optional<std::string> started = start_.tryStatic(*filter_, t_now);
+  if (!started) return;
   prev_q_n_b_.reset();
-  ROS_INFO("vi_ekf_slam: initialized from a %.1f s static interval (accel std %.3f m/s^2, gyro std %.4f rad/s)",
-           params_.static_init.window_s, static_result_->accel_std_mps2, static_result_->gyro_std_radps);
-  std::ostringstream e;
-  e << "initialized: static, " << params_.static_init.window_s << " s at rest";
-  sink_.event(e.str());
-  first_uninitialized_image_t_.reset();
+  sink_.event(*started);
   // Tracks start with the filter, as the images that reached the dynamic initializer meanwhile
   // depend on when they arrived (a live replay and an offline run then differ).
   if (tracker_) tracker_->reset();
-  if (dynamic_init_) dynamic_init_->reset();
 }
 
 void EkfSlamProcessor::imu(const sensor_msgs::Imu& msg) {
@@ -173,8 +157,7 @@ void EkfSlamProcessor::imu(const sensor_msgs::Imu& msg) {
     ROS_INFO("vi_ekf_slam: IMU frame '%s' (the IMU messages' frame_id%s)", body_frame_.c_str(),
              msg.header.frame_id.empty() ? " is empty: the default" : "");
   }
-  if (auto r = static_init_.addImu(*d)) static_result_ = r;
-  if (dynamic_init_ && filter_ && !filter_->initialized()) dynamic_init_->addImu(*d);
+  start_.addImu(*d, filter_ && !filter_->initialized());
   if (filter_) {
     filter_->addImu(*d);
     tryInitialize(d->timestamp);
@@ -241,34 +224,19 @@ void EkfSlamProcessor::image(const sensor_msgs::Image& msg) {
 }
 
 void EkfSlamProcessor::tryDynamicInitialize(PendingImage& img) {
-  if (!first_uninitialized_image_t_) first_uninitialized_image_t_ = img.t;
   // The tracks it aligns are the tracks the filter goes on with: the same tracker, no gyro seed
   // (no attitude yet). Frames are on the IMU clock through the configured time offset.
   CameraFrame frame = trackImage(img, std::nullopt);
   frame.timestamp = filter_->imuTime(img.t);
-  dynamic_init_->addFrame(frame);
-  std::string why;
-  const std::optional<DynamicInitResult> r = dynamic_init_->tryInitialize(&why);
-  if (!r) {
-    std::ostringstream w;
-    w << "waiting to initialize: at rest for " << params_.static_init.window_s << " s, or moving: " << why;
-    reportProblem(w.str());
+  std::string waiting;
+  const std::optional<std::string> started = start_.tryDynamic(*filter_, frame, img.t, &waiting);
+  if (!started) {
+    if (!waiting.empty()) reportProblem(waiting);
     return;
   }
-  if (r->state.timestamp < filter_->latestImuTime() - 1.0) return;  // the IMU no longer covers it
-  const int added = filter_->initialize(*r, r->state);
-  prev_q_n_b_ = r->state.q_n_b;
+  prev_q_n_b_ = start_.dynamicAttitude();
   last_processed_t_ = img.t;
-  std::ostringstream e;
-  e.precision(3);
-  e << "initialized: dynamic, " << (img.t - *first_uninitialized_image_t_) << " s after the first image (" << r->frames
-    << " images, " << r->features << " features, " << added << " landmarks, median depth " << r->median_depth_m
-    << " m, velocity sigma " << r->velocity_sigma_mps << " m/s, roll/pitch sigma " << r->tilt_sigma_rad
-    << " rad, time offset " << params_.filter.camera_time_offset_s + r->time_offset_correction_s << " s)";
-  ROS_INFO_STREAM("vi_ekf_slam: " << e.str());
-  sink_.event(e.str());
-  first_uninitialized_image_t_.reset();
-  static_result_.reset();
+  sink_.event(*started);
 }
 
 CameraFrame EkfSlamProcessor::trackImage(PendingImage& img, const std::optional<Eigen::Matrix3d>& R_cur_prev) {

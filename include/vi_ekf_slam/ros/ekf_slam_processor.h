@@ -1,7 +1,10 @@
-// The ROS glue's logic at the message level: synchronizes IMU, images and camera_info, handles
-// every kind of bad input, runs the front end and the filter of the core, and hands the results
-// to an OutputSink. It owns no NodeHandle, so the live node (EkfSlamRos) and the offline bag
-// runner (tools/run_bag) drive the very same code.
+// The ROS glue's logic at the message level. It routes IMU, images and camera_info through its
+// parts, each with one job: InputClock (stamps: stale, restarts, gaps), CalibrationSource
+// (intrinsics and extrinsic), FilterStart (static or dynamic initialization), the front end and
+// the core's filter, OutputFrames (REP-105 frames of the outputs) and the status (conversions),
+// counts every bad input, and hands the results to an OutputSink. It owns no NodeHandle, so the
+// live node (EkfSlamRos), the offline bag runner (tools/run_bag) and the gtests drive the very
+// same code.
 #pragma once
 
 #include <deque>
@@ -21,6 +24,7 @@
 #include "vi_ekf_slam/core/dynamic_initializer.h"
 #include "vi_ekf_slam/core/static_initializer.h"
 #include "vi_ekf_slam/ros/calibration_source.h"
+#include "vi_ekf_slam/ros/filter_start.h"
 #include "vi_ekf_slam/ros/input_clock.h"
 #include "vi_ekf_slam/ros/output_frames.h"
 #include "vi_ekf_slam/ros/params.h"
@@ -130,10 +134,7 @@ class EkfSlamProcessor {
   InputClock clock_;
   std::unique_ptr<EkfSlam> filter_;
   std::unique_ptr<FeatureTracker> tracker_;
-  std::unique_ptr<DynamicInitializer> dynamic_init_;
-  std::optional<double> first_uninitialized_image_t_;  ///< when waiting for initialization began [s]
-  StaticInitializer static_init_;
-  std::optional<StaticInitResult> static_result_;
+  FilterStart start_;
   std::deque<PendingImage> queue_;
   std::unordered_map<std::int64_t, Birth> births_;
   Vec3 last_gyro_ = Vec3::Zero();
