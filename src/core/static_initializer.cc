@@ -5,6 +5,15 @@
 
 namespace vi_ekf_slam {
 
+NavState StaticInitResult::navState() const {
+  NavState s;
+  s.timestamp = timestamp;
+  s.q_n_b = q_n_b;
+  s.b_g = b_g;
+  s.b_a = b_a;
+  return s;
+}
+
 Quat gravityAlignedAttitude(const Vec3& f_b) {
   // At rest f_b = -R_n_b^T g_n with g_n = +g e_z ({n} has z down), so -f_b is "down" in {b}.
   const Quat q = Quat::FromTwoVectors(-f_b.normalized(), Vec3::UnitZ());

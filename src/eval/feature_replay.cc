@@ -41,12 +41,7 @@ FeatureReplayResult replayFeatures(const FeatureTrackData& data, const std::vect
   size_t k = 0;
   for (; k < data.imu.size() && !filter.initialized(); ++k) {
     if (auto r = init.addImu(data.imu[k])) {
-      NavState s;
-      s.timestamp = r->timestamp;
-      s.q_n_b = r->q_n_b;
-      s.b_g = r->b_g;
-      s.b_a = r->b_a;
-      filter.initialize(s);
+      filter.initialize(r->navState());
       out.init_time = r->timestamp;
     }
   }

@@ -4,18 +4,14 @@
 #include <tf2/exceptions.h>
 #include <tf2_eigen/tf2_eigen.h>
 
+#include "vi_ekf_slam/core/so3.h"
+
 namespace vi_ekf_slam::glue {
 namespace {
 
 using Mat3 = Eigen::Matrix3d;
 using Mat6 = Eigen::Matrix<double, 6, 6>;
 using Vec3 = Eigen::Vector3d;
-
-Mat3 skew(const Vec3& v) {
-  Mat3 S;
-  S << 0, -v.z(), v.y(), v.z(), 0, -v.x(), -v.y(), v.x(), 0;
-  return S;
-}
 
 Mat6 toMat6(const boost::array<double, 36>& c) {
   Mat6 M;

@@ -6,6 +6,7 @@
 
 #include "vi_ekf_slam/ros/conversions.h"
 #include "vi_ekf_slam/ros/ekf_slam_processor.h"
+#include "small_camera.h"
 
 namespace vi_ekf_slam::glue {
 namespace {
@@ -56,15 +57,9 @@ struct Rig {
     params.node.tune_allocator = false;
     params.node.body_frame = body_frame;
     processor = std::make_unique<EkfSlamProcessor>(params, sink, &tf);
-    CameraIntrinsics in;
-    in.width = 64;
-    in.height = 48;
-    in.fx = in.fy = 50.0;
-    in.cx = 32.0;
-    in.cy = 24.0;
     std_msgs::Header h;
     h.frame_id = "cam0";
-    processor->cameraInfo(toCameraInfo(in, h));
+    processor->cameraInfo(toCameraInfo(smallCamera(), h));
   }
 };
 

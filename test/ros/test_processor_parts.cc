@@ -5,6 +5,7 @@
 #include "vi_ekf_slam/ros/calibration_source.h"
 #include "vi_ekf_slam/ros/conversions.h"
 #include "vi_ekf_slam/ros/input_clock.h"
+#include "small_camera.h"
 
 namespace vi_ekf_slam::glue {
 
@@ -36,12 +37,7 @@ TEST(CalibrationSource, SaysWhatIsMissingAndWhenTheCalibrationChanges) {
   NodeOptions o;
   CalibrationSource cal(o);
   EXPECT_NE(cal.ready("cam0", "imu0", nullptr).find("no valid camera_info"), std::string::npos);
-  CameraIntrinsics in;
-  in.width = 64;
-  in.height = 48;
-  in.fx = in.fy = 50.0;
-  in.cx = 32.0;
-  in.cy = 24.0;
+  CameraIntrinsics in = smallCamera();
   std_msgs::Header h;
   h.frame_id = "cam0";
   bool changed = false;

@@ -7,6 +7,7 @@
 #include <deque>
 #include <optional>
 
+#include "vi_ekf_slam/core/navigation_output.h"
 #include "vi_ekf_slam/core/so3.h"
 #include "vi_ekf_slam/core/types.h"
 
@@ -32,6 +33,9 @@ struct StaticInitResult {
   Vec3 b_a = Vec3::Zero();
   double accel_std_mps2 = 0.0;
   double gyro_std_radps = 0.0;
+
+  /// The filter's start at the end of the window: attitude and biases, at rest.
+  NavState navState() const;
 };
 
 /// Attitude with the given body-frame "down" direction mapped to {n}'s z axis and zero yaw.
