@@ -476,7 +476,8 @@ int main(int argc, char** argv) {
                   {"filter_ms_p95", s.p95_update_ms},
                   {"nees_pose_first_10s", s.nees_pose_early},
                   {"runs_started", s.runs_started},
-                  {"init_delay_s", s.init_delay_s}};
+                  {"init_delay_s", s.init_delay_s},
+                  {"ate_posyaw_runs_m", s.ate_posyaw_runs_m}};
   }
   std::ofstream(out / "summary.json") << js.dump(2) << "\n";
 

@@ -17,7 +17,7 @@ void FilterStart::addImu(const ImuData& d, bool waiting) {
 
 std::optional<std::string> FilterStart::tryStatic(EkfSlam& filter, double t_now) {
   // Only a recent static interval: if the rig moved since, wait for the next one.
-  if (!static_result_ || t_now - static_result_->timestamp > 0.5) return std::nullopt;
+  if (!static_result_ || !static_result_->usableAt(t_now)) return std::nullopt;
   filter.initialize(static_result_->navState());
   ROS_INFO("vi_ekf_slam: initialized from a %.1f s static interval (accel std %.3f m/s^2, gyro std %.4f rad/s)",
            params_.static_init.window_s, static_result_->accel_std_mps2, static_result_->gyro_std_radps);

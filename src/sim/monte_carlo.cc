@@ -231,6 +231,7 @@ ConsistencySummary summarize(const std::string& name, const std::vector<RunResul
   std::vector<double> ate, ateq, fin, gam, ate_py, rtf;
   for (const auto& r : runs) {
     ate_py.push_back(r.ate_posyaw_m);
+    s.ate_posyaw_runs_m.push_back(r.ate_posyaw_m);
     rtf.push_back(r.real_time_factor);
     ate.push_back(r.ate_position_m);
     ateq.push_back(r.ate_orientation_deg);

@@ -6,6 +6,8 @@
 #include <deque>
 #include <optional>
 
+#include "vi_ekf_slam/core/static_initializer.h"
+
 namespace vi_ekf_slam::sim {
 
 NavState trueNavState(const Trajectory& trajectory, double t) {
@@ -80,16 +82,28 @@ SimRun runSimulation(const Scenario& sc, const EkfSlamConfig& config, const NavS
   TrackingCamera camera(sc.world, sc.camera, sc.T_b_c, sc.cam);
   SimRun run;
   std::optional<DynamicInitializer> dynamic;
+  std::optional<StaticInitializer> still;
+  std::optional<StaticInitResult> at_rest;
   if (sc.dynamic_init) {
     dynamic.emplace(*sc.dynamic_init, sc.camera, sc.T_b_c);
+    StaticInitParams sp;
+    sp.gravity_mps2 = config.gravity_mps2;
+    still.emplace(sp);
   } else {
     filter.initialize(initial);
     run.initialized_t = initial.timestamp;
   }
-  // Until the dynamic initializer succeeds, frames go to it (on the IMU clock through the
-  // configured time offset), as in the node; the frames it has seen are not replayed.
-  auto tryDynamicInitialization = [&](CameraFrame frame) {
+  // Until the filter starts, each frame (on the IMU clock through the configured time offset)
+  // starts it from a recent interval at rest or goes to the dynamic initializer, as in the node;
+  // the frames the initializer has seen are not replayed.
+  auto tryInitialization = [&](CameraFrame frame) {
     frame.timestamp = filter.imuTime(frame.timestamp);
+    if (at_rest && at_rest->usableAt(frame.timestamp)) {
+      const NavState s = at_rest->navState();
+      filter.initialize(registerToTruth(s, trueNavState(traj, s.timestamp), config.initial, rng));
+      run.initialized_t = s.timestamp;
+      return;
+    }
     dynamic->addFrame(frame);
     const std::optional<DynamicInitResult> r = dynamic->tryInitialize(nullptr);
     if (!r) return;
@@ -127,7 +141,10 @@ SimRun runSimulation(const Scenario& sc, const EkfSlamConfig& config, const NavS
   for (size_t k = 0; k < imu.samples.size(); ++k) {
     if (!activeFault(sc.faults, SensorFault::Kind::kImuGap, imu.samples[k].timestamp)) {
       filter.addImu(imu.samples[k]);
-      if (!filter.initialized()) dynamic->addImu(imu.samples[k]);
+      if (!filter.initialized()) {
+        dynamic->addImu(imu.samples[k]);
+        if (auto r = still->addImu(imu.samples[k])) at_rest = r;
+      }
     }
     while (frameTime(next_frame) <= imu.samples[k].timestamp + 1e-12 && frameTime(next_frame) <= last_frame_time) {
       const double t = frameTime(next_frame++);
@@ -141,7 +158,7 @@ SimRun runSimulation(const Scenario& sc, const EkfSlamConfig& config, const NavS
       if (filter.initialized()) {
         pending.push_back(std::move(frame));
       } else {
-        tryDynamicInitialization(std::move(frame));
+        tryInitialization(std::move(frame));
       }
     }
     while (!pending.empty() && filter.imuTime(pending.front().timestamp) <= filter.latestImuTime() + 1e-12) {

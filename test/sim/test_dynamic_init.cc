@@ -108,17 +108,21 @@ TEST(DynamicInit, NoiseFreeWindowGivesExactGravityVelocityAndDepths) {
     EXPECT_NEAR(r.state.timestamp, t0 + 1.0, 1e-3);
     EXPECT_NEAR(r.time_offset_correction_s, 0.0, 1e-3);
     EXPECT_LT(r.residual_rms_px, 0.01);
+    // Every aligned feature at its true depth; the scene depth is their median when the window
+    // determines them (for the 1 px it assumes), 0 (unknown) when the sway is too slow for that.
+    ASSERT_FALSE(r.landmarks.empty());
+    for (const DynamicInitLandmark& l : r.landmarks) EXPECT_NEAR(l.depth_m, w.true_depth.at(l.id), 0.01) << t0;
     std::vector<double> depths;
     for (const auto& [id, z] : w.true_depth) depths.push_back(z);
     std::nth_element(depths.begin(), depths.begin() + static_cast<std::ptrdiff_t>(depths.size() / 2), depths.end());
-    EXPECT_NEAR(r.median_depth_m, depths[depths.size() / 2], 0.05) << t0;
+    if (r.median_depth_m > 0.0) EXPECT_NEAR(r.median_depth_m, depths[depths.size() / 2], 0.05) << t0;
     // Its uncertainty is small but not zero (the pixel noise it assumes).
     EXPECT_GT(r.velocity_sigma_mps, 0.0);
-    EXPECT_LT(r.velocity_sigma_mps, 0.15);
+    EXPECT_LE(r.velocity_sigma_mps, DynamicInitParams().max_velocity_sigma_mps);
   }
-  // The sway is slow: some windows lack the acceleration and wait (1 px noise assumed), the
-  // others are exact.
-  EXPECT_GE(initialized, 2);
+  // The sway is slow: the velocity is known to 0.16-0.27 m/s for 1 px (below the bound, all five
+  // windows answer, exactly); a window that lacked the acceleration would wait.
+  EXPECT_GE(initialized, 4);
 }
 
 TEST(DynamicInit, NoisyWindowsAreUnbiasedAndAsUncertainAsItSays) {

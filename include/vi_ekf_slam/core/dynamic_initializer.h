@@ -29,13 +29,16 @@
 namespace vi_ekf_slam {
 
 struct DynamicInitParams {
-  double window_s = 1.0;                 ///< span of the frames used [s]
-  int min_frames = 6;                    ///< frames in the window [count]
-  int min_features = 12;                 ///< features seen in >= min_observations frames [count]
-  int min_observations = 4;              ///< frames a feature must be seen in to be used [count]
-  double max_velocity_sigma_mps = 0.15;  ///< refuse when the velocity is known worse than this [m/s]
-  double max_tilt_sigma_rad = 0.035;     ///< refuse when roll/pitch is known worse than this [rad]
-  double gyro_bias_sigma_radps = 0.01;   ///< initial std-dev of the (unknown) gyro bias [rad/s]
+  double window_s = 1.0;     ///< span of the frames used [s]
+  int min_frames = 6;        ///< frames in the window [count]
+  int min_features = 12;     ///< features seen in >= min_observations frames [count]
+  int min_observations = 4;  ///< frames a feature must be seen in to be used [count]
+  /// Refuse when the velocity is known worse than this [m/s]: the near-degenerate windows (turning
+  /// in place, constant velocity) whose linearized covariance is not to be trusted. A start with
+  /// an honest 0.2-0.3 m/s is consistent and the filter sharpens it within seconds.
+  double max_velocity_sigma_mps = 0.3;
+  double max_tilt_sigma_rad = 0.035;    ///< refuse when roll/pitch is known worse than this [rad]
+  double gyro_bias_sigma_radps = 0.01;  ///< initial std-dev of the (unknown) gyro bias [rad/s]
   /// std-dev of the (unknown) accelerometer bias [m/s^2]; set from the filter's prior
   double accel_bias_sigma_mps2 = 0.05;
   double time_offset_sigma_s = 0.05;  ///< std-dev of the camera-IMU time offset it assumes [s]
@@ -81,9 +84,10 @@ struct DynamicInitResult {
     base.velocity_attitude_accel_bias = covariance;
     return base;
   }
-  int frames = 0;                ///< frames used
-  int features = 0;              ///< features used
-  double median_depth_m = 0.0;   ///< of the features in the last frame
+  int frames = 0;    ///< frames used
+  int features = 0;  ///< features used
+  /// of the features in the last frame whose depth it knows to 50%; 0 (unknown) with fewer than 3
+  double median_depth_m = 0.0;
   double residual_rms_px = 0.0;  ///< of the alignment
   std::vector<DynamicInitLandmark> landmarks;
 };

@@ -36,6 +36,9 @@ struct StaticInitResult {
 
   /// The filter's start at the end of the window: attitude and biases, at rest.
   NavState navState() const;
+  /// Whether a filter starting at time t may use it: only a recent interval (the rig may have
+  /// moved since; then the next interval or the dynamic initializer starts it).
+  bool usableAt(double t) const { return t - timestamp <= 0.5; }
 };
 
 /// Attitude with the given body-frame "down" direction mapped to {n}'s z axis and zero yaw.

@@ -65,13 +65,14 @@ constexpr double kEarlyWindowS = 10.0;
 /// from their initialization on, over the number of frames every one of them has.
 struct ConsistencySummary {
   std::string name;
-  int runs = 0;                      ///< runs that initialized
-  int runs_started = 0;              ///< runs in all
-  std::vector<double> init_delay_s;  ///< every run's RunResult::init_delay_s
-  double ate_position_m = 0.0;       ///< mean over runs of the per-run position RMSE
-  double ate_posyaw_m = 0.0;         ///< the same after posyaw alignment
-  double real_time_factor = 0.0;     ///< mean over runs
-  double ate_orientation_deg = 0.0;  ///< mean over runs of the per-run orientation RMSE
+  int runs = 0;                           ///< runs that initialized
+  int runs_started = 0;                   ///< runs in all
+  std::vector<double> init_delay_s;       ///< every run's RunResult::init_delay_s
+  std::vector<double> ate_posyaw_runs_m;  ///< every initialized run's RunResult::ate_posyaw_m [m]
+  double ate_position_m = 0.0;            ///< mean over runs of the per-run position RMSE
+  double ate_posyaw_m = 0.0;              ///< the same after posyaw alignment
+  double real_time_factor = 0.0;          ///< mean over runs
+  double ate_orientation_deg = 0.0;       ///< mean over runs of the per-run orientation RMSE
   double final_position_error_m = 0.0;
   double final_position_error_pct = 0.0;  ///< of the distance walked
   double distance_m = 0.0;

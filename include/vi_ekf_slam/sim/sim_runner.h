@@ -53,10 +53,10 @@ struct Scenario {
   bool start_at_truth = false;
   /// Faults injected while running (none by default).
   std::vector<SensorFault> faults;
-  /// Start as the node does when the rig moves: the filter waits for the dynamic initializer
-  /// (core/dynamic_initializer.h) on the frames and IMU from the start on, instead of starting
-  /// from `initial`. Its estimate is registered to the truth's position and yaw (what it cannot
-  /// know) with an error drawn from the filter's prior, as a prior start is.
+  /// Start as the node does: the filter waits for the static initializer (a recent interval at
+  /// rest) or the dynamic initializer (core/dynamic_initializer.h), whichever answers first on
+  /// the frames and IMU from the start on, instead of starting from `initial`. Its estimate is registered to the
+  /// truth's position and yaw (what it cannot know) with an error drawn from the filter's prior, as a prior start is.
   std::optional<DynamicInitParams> dynamic_init;
 };
 
