@@ -38,6 +38,7 @@
 #include <cv_bridge/cv_bridge.h>
 #include <sensor_msgs/CompressedImage.h>
 #include <sensor_msgs/point_cloud2_iterator.h>
+#include <set>
 #include <sstream>
 
 #include "vi_ekf_slam/core/frames.h"
@@ -440,10 +441,11 @@ int main(int argc, char** argv) {
         std::exit(1);
       }
     }();
+    // Every other name:=value is a node parameter (an unknown one is refused with the closest name).
+    static const std::set<std::string> kOwn = {"bag",   "out",      "config",    "rig",         "mechanization",
+                                               "plots", "recorded", "imu_topic", "image_topic", "camera_info_topic"};
     for (const auto& [k, v] : args) {
-      if (k != "bag" && k != "out" && k != "config" && k != "mechanization" && k != "plots" &&
-          k.rfind("reference", 0) != 0 && k != "imu_topic" && k != "image_topic" && k != "camera_info_topic")
-        yaml.set(k, v);
+      if (!kOwn.count(k) && k.rfind("reference", 0) != 0) yaml.set(k, v);
     }
     if (!m.empty()) yaml.set("mechanization", m);
     glue::NodeParams params;

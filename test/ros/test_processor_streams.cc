@@ -35,7 +35,7 @@ struct Expect {
   double min_odom_hz = 15.0;       ///< odometry messages per second of stream time
   double max_final_error_m = 0.0;  ///< after registering the first pose (0: not checked)
   int min_inputs_level = 0;        ///< the inputs' health must reach it once (1 WARN, 2 ERROR)
-  std::string event;               ///< a substring some event must contain
+  std::string event = "";          ///< a substring some event must contain
   long min_resets = 0;
 };
 

@@ -13,6 +13,7 @@
 
 #include <array>
 #include <cstdio>
+#include <fstream>
 #include <string>
 
 namespace {
@@ -103,4 +104,12 @@ TEST(ToolsCli, RunBagPicksTopicsAndReadsCompressedImages) {
   EXPECT_NE(ok.output.find("sensor_centric_composition: "), std::string::npos) << ok.output;
   EXPECT_EQ(ok.output.find(": 0 images"), std::string::npos) << ok.output;
   EXPECT_EQ(ok.output.find("not decoded"), std::string::npos) << ok.output;
+  // A rig file on top of the defaults (make realdata's rig:=), and a parameter on the command line.
+  std::ofstream(dir + "/rig.yaml") << "max_landmarks: 120\n";
+  const Outcome rig = run(base + " imu_topic:=/imu/data rig:=" + dir + "/rig.yaml mechanization:=world_centric");
+  EXPECT_EQ(rig.code, 0) << rig.output;
+  EXPECT_NE(rig.output.find("world_centric: "), std::string::npos) << rig.output;
+  const Outcome typo = run(base + " imu_topic:=/imu/data max_landmark:=120");
+  EXPECT_EQ(typo.code, 1) << typo.output;
+  EXPECT_NE(typo.output.find("max_landmarks"), std::string::npos) << typo.output;
 }
