@@ -317,9 +317,15 @@ FrameResult EkfSlam::processFrame(const CameraFrame& camera_frame) {
   r.removed_ids = makeRoomInTheMap(frame.timestamp, static_cast<int>(fresh.size()));
   r.new_ids = addLandmarks(fresh, frame.timestamp);
   if (shouldCompose(static_cast<int>(r.new_ids.size()))) {
-    compose(state_);
-    ++compositions_;
-    r.composed = true;
+    try {
+      compose(state_);
+      ++compositions_;
+      r.composed = true;
+    } catch (const std::runtime_error& e) {  // a diverged state the frame change cannot carry
+      r.lost = e.what();
+      r.processed = true;
+      return r;
+    }
   }
   r.lost = divergence_.update(frame.timestamp, state_, r.update.accepted,
                               static_cast<int>(r.update.rejected_ids.size()), config_.divergence);

@@ -118,7 +118,10 @@ UpdateResult ekfUpdate(FilterState& state, const std::vector<FeatureObservation>
       Eigen::Vector2d uv;
       if (!li || !predictObservation(state.x, state.landmark(*li), camera, T_b_c, &uv, &a.J)) return false;
       if (!predictImageVelocity(state.x, state.landmark(*li), camera, T_b_c, omega_b, &a.H_td)) a.H_td.setZero();
-      a.residual = a.measured - uv - a.H_td * rowTime(a.measured.y());
+      // The state stays propagated to the prior's time offset: the iterate's offset moves the
+      // prediction through the image velocity, as the linear model says (leaving it out counted
+      // H_td d_td once more at every iteration).
+      a.residual = a.measured - uv - a.H_td * (rowTime(a.measured.y()) + dd(idx::kTd));
       *cost += a.residual.squaredNorm() / r_var;
     }
     return true;

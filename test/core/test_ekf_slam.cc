@@ -280,3 +280,26 @@ TEST(EkfSlam, ThePredictedStateIsTheNextPropagationAndChangesNothing) {
     EXPECT_LT((w - Vec3(0.1, -0.2, 0.3)).norm(), 1e-12);  // zero gyro bias
   }
 }
+
+// A covariance that is no longer finite (a diverged filter; here an absurd but finite specific
+// force) makes the frame change impossible: processFrame says the filter is lost, so that the
+// node resets it, instead of throwing out of the image callback.
+TEST(EkfSlam, ANonFiniteCovarianceIsReportedLostNotThrown) {
+  EkfSlamConfig cfg;  // composition after every update
+  EkfSlam f(cfg, sim::paperCamera(), sim::torsoCameraExtrinsics());
+  f.initialize(NavState());
+  ImuData d;
+  d.am = Vec3(0, 0, -9.81);
+  for (int k = 0; k <= 40; ++k) {
+    d.timestamp = 0.005 * k;
+    d.am.x() = k == 10 ? 1e200 : 0.0;
+    f.addImu(d);
+  }
+  CameraFrame frame;
+  frame.timestamp = 0.1;
+  for (int i = 0; i < 8; ++i) frame.features.push_back({i, Eigen::Vector2d(100 + 50 * i, 200)});
+  FrameResult r;
+  ASSERT_NO_THROW(r = f.processFrame(frame));
+  EXPECT_TRUE(r.processed);
+  EXPECT_FALSE(r.lost.empty());
+}
