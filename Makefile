@@ -46,7 +46,7 @@ help:
 	@echo "make bag    - render the hallway walk into $(BAG)"
 	@echo "make demo RVIZ=1 - the demo with rviz"
 	@echo "make suite  - the study over every trajectory in windows + generated walks, one table with worst cases -> results/suite"
-	@echo "make initsuite - starts mid-walk: the dynamic initializer against a start from the truth (docs/initialization.md) -> results/init_suite"
+	@echo "make initsuite - starts mid-walk as the node starts, against starts from the truth and from the prior (docs/initialization.md) -> results/init_suite"
 	@echo "make realdata - the real hand-held recording (DATA_DIR/dmvio_handheld) -> results/realdata"
 	@echo "make bench  - benchmarks (core vs map size, tracker, pipeline) -> results/bench/summary.json"
 	@echo "make soak   - 30 min endurance walk per mechanization (SOAK_MINUTES=) -> results/soak"
@@ -155,7 +155,7 @@ suite: build
 
 # Starting mid-walk (docs/initialization.md): on the built-in walk, the TUM corridor and EuRoC
 # V1_01, the study from 5 random start times (20 runs) with the node's default configuration,
-# from the dynamic initializer and from the truth; one table.
+# started as the node starts (at rest or moving), from the truth and from the prior; one table.
 #   make initsuite [SEED=1] [INIT_OUT=results/init_suite]
 INIT_OUT ?= results/init_suite
 initsuite: build
