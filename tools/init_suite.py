@@ -1,11 +1,11 @@
 #!/usr/bin/env python3
 """Starting mid-walk (docs/initialization.md): on each trajectory, the study from N random start
-times (RUNS runs in all, the same seeds) twice with the node's default configuration: once from the
-dynamic initializer (`--init dynamic`), once from the true state (`--init truth`). One table:
-initialized within 1.5 s, pose NEES over the first 10 s after the initialization against its 95%
-band, and the ATE of the rest of the run against the start from the truth. A third study starts from
-an error drawn from the filter's prior (`--init prior`, the same biased IMU as the dynamic start):
-what a start that knows the state to the prior's sigmas, but not the IMU's biases, gets.
+times (RUNS runs in all, the same seeds) three times with the node's default configuration: started
+as the node starts (`--init dynamic`: a recent interval at rest, else the dynamic initializer), from
+the true state (`--init truth`), and from an error drawn from the filter's prior (`--init prior`,
+the same biased IMU as the first: a start that knows the state to the prior's sigmas, but not the
+IMU's biases). One table: initialized within 1.5 s, pose NEES over the first 10 s after the
+initialization against its 95% band, and the ATE of the rest of the run against the other starts.
 
 The dynamic start knows neither position nor yaw (they are registered to the truth with an error
 drawn from the prior), so the ATE compared is the posyaw one (4-DoF aligned), which the

@@ -228,9 +228,8 @@ ConsistencySummary summarize(const std::string& name, const std::vector<RunResul
   for (size_t k = 0; k < T && s.t[k] - s.t.front() < kEarlyWindowS; ++k) early.push_back(s.avg_nees_pose[k]);
   s.nees_pose_early = mean(early);
   s.consistent_fraction = counted ? static_cast<double>(inside) / counted : 0.0;
-  std::vector<double> ate, ateq, fin, gam, ate_py, rtf;
+  std::vector<double> ate, ateq, fin, gam, rtf;
   for (const auto& r : runs) {
-    ate_py.push_back(r.ate_posyaw_m);
     s.ate_posyaw_runs_m.push_back(r.ate_posyaw_m);
     rtf.push_back(r.real_time_factor);
     ate.push_back(r.ate_position_m);
@@ -239,7 +238,7 @@ ConsistencySummary summarize(const std::string& name, const std::vector<RunResul
     gam.push_back(r.frames.back().gamma);
   }
   s.ate_position_m = mean(ate);
-  s.ate_posyaw_m = mean(ate_py);
+  s.ate_posyaw_m = mean(s.ate_posyaw_runs_m);
   s.real_time_factor = mean(rtf);
   s.ate_orientation_deg = mean(ateq);
   s.final_position_error_m = mean(fin);

@@ -55,8 +55,9 @@ struct Scenario {
   std::vector<SensorFault> faults;
   /// Start as the node does: the filter waits for the static initializer (a recent interval at
   /// rest) or the dynamic initializer (core/dynamic_initializer.h), whichever answers first on
-  /// the frames and IMU from the start on, instead of starting from `initial`. Its estimate is registered to the
-  /// truth's position and yaw (what it cannot know) with an error drawn from the filter's prior, as a prior start is.
+  /// the frames and IMU from the start on, instead of starting from `initial`. Its estimate is
+  /// registered to the truth's position and yaw (what it cannot know) with an error drawn from
+  /// the filter's prior, as a prior start is.
   std::optional<DynamicInitParams> dynamic_init;
 };
 
