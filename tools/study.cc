@@ -8,6 +8,7 @@
 //                     [--per-metre 15] [--start-offset S] [--max-duration S] [--max-landmarks N]
 //                     [--imu ASL_IMU_CSV] [--imu-noise datasheet|euroc_mav] [--preset openvins_sim]
 //                     [--inverse-depth INITIAL_DEPTH_M,SIGMA_PER_M] [--update-iterations N]
+//                     [--landmark-entry triangulated|prior]
 //
 // --preset openvins_sim: OpenVINS's simulator setup on a TUM file (sim/openvins_preset.h).
 // --start-offset / --max-duration: a time window of the trajectory (e.g. start while walking).
@@ -70,9 +71,10 @@ struct Options {
   // landmarks in every configuration (default: the core's).
   std::string inverse_depth;
   double inverse_depth_initial_m = 0.0, inverse_depth_sigma = 0.0;
-  std::string depth_prior;    // "fixed" | "scene": the inverse-depth prior's centre; "": the core's default
-  double gate = 0.0;          // chi^2 gate probability of every configuration; 0: the core's default
-  int update_iterations = 0;  // linearizations per update of every configuration; 0: the core's default
+  std::string depth_prior;     // "fixed" | "scene": the inverse-depth prior's centre; "": the core's default
+  std::string landmark_entry;  // "triangulated" | "prior": new tracks wait for a baseline or not; "": the core's
+  double gate = 0.0;           // chi^2 gate probability of every configuration; 0: the core's default
+  int update_iterations = 0;   // linearizations per update of every configuration; 0: the core's default
   // +zero_velocity: "wait" (the core's default): new landmarks wait until the standing detector
   // sees the rig move, unless the IMU shows rest; "immediate": whenever a track is new.
   std::string new_landmarks = "wait";
@@ -120,7 +122,10 @@ Options parse(int argc, char** argv) {
       "inverse-depth", po::value(&o.inverse_depth), "INITIAL_DEPTH_M,SIGMA_PER_M of new inverse-depth landmarks")(
       "depth-prior", po::value(&o.depth_prior),
       "fixed | scene: new inverse-depth landmarks start at INITIAL_DEPTH_M, or at the median depth of the landmarks "
-      "seen (default: the core's)");
+      "seen (default: the core's)")(
+      "landmark-entry", po::value(&o.landmark_entry),
+      "triangulated | prior: new inverse-depth tracks wait for the baseline that triangulates them, or enter at the "
+      "prior depth at once (default: the core's)");
   const po::variables_map vm = cli::parse(argc, argv, kUsage,
                                           "Monte-Carlo consistency study (paper Sec. IV-A): M runs of each filter "
                                           "configuration on the built-in hallway walk or a TUM trajectory.",
@@ -164,6 +169,9 @@ Options parse(int argc, char** argv) {
        !(o.inverse_depth_initial_m > 0.0) || !(o.inverse_depth_sigma > 0.0))) {
     usage("--inverse-depth needs INITIAL_DEPTH_M,SIGMA_PER_M (both > 0)");
   }
+  if (!o.landmark_entry.empty() && o.landmark_entry != "triangulated" && o.landmark_entry != "prior") {
+    usage("--landmark-entry must be triangulated or prior");
+  }
   if (!o.depth_prior.empty() && o.depth_prior != "fixed" && o.depth_prior != "scene") {
     usage("--depth-prior must be fixed or scene");
   }
@@ -193,6 +201,7 @@ EkfSlamConfig withStudyOptions(EkfSlamConfig c, const Options& o, const sim::Sce
   }
   if (o.update_iterations > 0) c.update.iterations = o.update_iterations;
   if (!o.depth_prior.empty()) c.inverse_depth_scene_prior = o.depth_prior == "scene";
+  if (!o.landmark_entry.empty()) c.triangulation.enabled = o.landmark_entry == "triangulated";
   // The recorded IMU is EuRoC's MAV: standing on the ground it does not sway like a pedestrian.
   if (!o.imu.empty()) c.zero_velocity.velocity_sigma_mps = eval::kEurocMavStandingVelocitySigma;
   if (o.gate > 0.0) c.update.gate_probability = o.gate;

@@ -39,6 +39,7 @@ void EkfSlam::reset() {
   zero_velocity_updates_ = 0;
   stationary_.reset();
   divergence_.reset();
+  delayed_.clear(nullptr);
   seen_moving_ = false;
 }
 
@@ -88,6 +89,7 @@ void EkfSlam::initialize(const NavState& init, const InitialUncertainty& u, doub
   // uncertainty moves to p_n_s, q_n_s (the same frame change as a mechanization switch).
   if (isSensorCentric(config_.mechanization)) switchMechanization(s, config_.mechanization);
   state_ = std::move(s);
+  delayed_.clear(nullptr);
   last_seen_.clear();
   stationary_.reset();
   divergence_.reset();
@@ -305,19 +307,27 @@ FrameResult EkfSlam::processFrame(const CameraFrame& camera_frame) {
   detectStanding(frame, at_rest, &r);
   std::vector<FeatureObservation> known, fresh;
   for (const auto& f : frame.features) {
-    if (f.uv.allFinite()) (state_.findLandmark(f.id) ? known : fresh).push_back(f);
+    // (An id in the clones' range is no track's: refused, it would observe a clone.)
+    if (f.uv.allFinite() && !isCloneId(f.id)) (state_.findLandmark(f.id) ? known : fresh).push_back(f);
   }
   updateSeenMoving(r);
-  if (config_.zero_velocity.enabled && config_.zero_velocity.defer_landmarks && !seen_moving_ && !at_rest) {
-    r.deferred_features = static_cast<int>(fresh.size());
-    fresh.clear();  // their tracks go on and become landmarks once the rig is seen moving
-  }
+  const bool defer =
+      config_.zero_velocity.enabled && config_.zero_velocity.defer_landmarks && !seen_moving_ && !at_rest;
   r.update = ekfUpdate(state_, known, camera_, T_b_c_, config_.update, last_gyro_ - state_.x.b_g);
   for (const auto& f : known) last_seen_[f.id] = frame.timestamp;
-  r.removed_ids = makeRoomInTheMap(frame.timestamp, static_cast<int>(fresh.size()));
-  r.new_ids = addLandmarks(fresh, frame.timestamp);
+  if (triangulationActive()) {
+    addLandmarksDelayed(fresh, frame.timestamp, defer, &r);
+  } else {
+    if (defer) {
+      r.deferred_features = static_cast<int>(fresh.size());
+      fresh.clear();  // their tracks go on and become landmarks once the rig is seen moving
+    }
+    r.removed_ids = makeRoomInTheMap(frame.timestamp, static_cast<int>(fresh.size()));
+    r.new_ids = addLandmarks(fresh, frame.timestamp);
+  }
   if (shouldCompose(static_cast<int>(r.new_ids.size()))) {
     try {
+      delayed_.beforeComposition(state_);
       compose(state_);
       ++compositions_;
       r.composed = true;
@@ -400,6 +410,41 @@ std::vector<std::int64_t> EkfSlam::addLandmarks(const std::vector<FeatureObserva
   return added;
 }
 
+bool EkfSlam::triangulationActive() const {
+  return config_.triangulation.enabled && config_.landmark_init == LandmarkInitMethod::kInverseDepth &&
+         state_.mechanization() == Mechanization::kSensorCentricComposition &&
+         config_.composition_trigger == CompositionTrigger::kEveryUpdate;
+}
+
+void EkfSlam::addLandmarksDelayed(const std::vector<FeatureObservation>& fresh, double t, bool defer, FrameResult* r) {
+  const double pixel_var = config_.update.pixel_noise_px * config_.update.pixel_noise_px;
+  // Tracks wait for their baseline only while the rig is seen moving: the baseline then comes
+  // within max_wait_s, and a point entering at the prior depth would be linearized at a depth
+  // that may be off by a factor of five while the camera moves under it. Otherwise (standing,
+  // swaying, starting) they are handled as without the delay: at the prior depth when the rules
+  // of the zero-velocity detector let them in.
+  const bool wait = seen_moving_;
+  DelayedLandmarks::Selection sel =
+      delayed_.select(state_, fresh, camera_, T_b_c_, config_.triangulation, pixel_var, config_.update.gate_probability,
+                      wait, config_.triangulation.min_map_landmarks - (state_.numLandmarks() - delayed_.clones()));
+  // Those that waited too long enter at the prior depth, as without the delay, unless the rig is
+  // not seen moving (then they wait on, on a new clone).
+  std::vector<FeatureObservation> at_prior;
+  if (defer) {
+    r->deferred_features = static_cast<int>(sel.expired.size());
+  } else {
+    at_prior = sel.expired;
+  }
+  // Room for both and for a clone.
+  r->removed_ids = makeRoomInTheMap(t, static_cast<int>(sel.triangulated.size() + at_prior.size()) + 1);
+  const int capacity = config_.max_landmarks - state_.numLandmarks();
+  r->new_ids = delayed_.commit(state_, sel, fresh, capacity, T_b_c_, config_.triangulation);
+  r->new_triangulated = static_cast<int>(r->new_ids.size());
+  for (auto id : r->new_ids) last_seen_[id] = t;
+  for (auto id : addLandmarks(at_prior, t)) r->new_ids.push_back(id);
+  r->waiting_features = delayed_.waitingTracks();
+}
+
 bool EkfSlam::confidentlyMoving() const {
   const Vec3 v = state_.x.v_s_b;
   const double speed = v.norm();
@@ -424,6 +469,7 @@ bool EkfSlam::setConfig(const EkfSlamConfig& config, std::string* error) {
 
 void EkfSlam::setMechanization(Mechanization m) {
   config_.mechanization = m;
+  delayed_.clear(&state_);  // the clones' orientations are in the frame being left
   if (initialized_)
     switchMechanization(state_, m);
   else

@@ -66,6 +66,12 @@ std::string EkfSlamConfig::validate() const {
   requirePositive(err, "landmark_depth_sigma_m [m]", landmark_depth_sigma_m);
   requirePositive(err, "inverse_depth_initial_m [m]", inverse_depth_initial_m);
   requirePositive(err, "inverse_depth_sigma [1/m]", inverse_depth_sigma);
+  requirePositive(err, "triangulation.max_relative_depth_sigma", triangulation.max_relative_depth_sigma);
+  requireNonNegative(err, "triangulation.clone_interval_s [s]", triangulation.clone_interval_s);
+  requireNonNegative(err, "triangulation.max_wait_s [s]", triangulation.max_wait_s);
+  requirePositive(err, "triangulation.min_depth_m [m]", triangulation.min_depth_m);
+  if (triangulation.min_map_landmarks < 0) err << "triangulation.min_map_landmarks must be >= 0\n";
+  requireNonNegative(err, "triangulation.starved_max_wait_s [s]", triangulation.starved_max_wait_s);
   if (max_landmarks < 1) err << "max_landmarks must be >= 1 (got " << max_landmarks << ")\n";
   if (composition_new_landmarks < 0) err << "composition_new_landmarks must be >= 0\n";
   if (!std::isfinite(landmark_timeout_s)) err << "landmark_timeout_s must be finite (use < 0 for never)\n";

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 
+#include "vi_ekf_slam/core/delayed_landmarks.h"
 #include "vi_ekf_slam/core/frame_change.h"
 #include "vi_ekf_slam/core/matrix_utils.h"
 
@@ -43,12 +44,14 @@ NavState navState(const FilterState& s) {
 }
 
 std::vector<NavLandmark> navLandmarks(const FilterState& s) {
-  std::vector<NavLandmark> out(static_cast<size_t>(s.numLandmarks()));
+  std::vector<NavLandmark> out;
+  out.reserve(static_cast<size_t>(s.numLandmarks()));
   const Eigen::MatrixXd& P = s.covariance();
   const bool sc = isSensorCentric(s.mechanization());
   const Mat3 R_n_s = s.x.q_n_s.toRotationMatrix();
   for (int i = 0; i < s.numLandmarks(); ++i) {
-    auto& o = out[static_cast<size_t>(i)];
+    if (isCloneId(s.landmarkIds()[static_cast<size_t>(i)])) continue;  // a camera position, not a point of the map
+    auto& o = out.emplace_back();
     o.id = s.landmarkIds()[static_cast<size_t>(i)];
     const int li = s.landmarkIndex(i);
     Mat3 M;  // d(point in {s}) / d(landmark entries)

@@ -126,6 +126,7 @@ RunResult runMonteCarloRun(const Scenario& scenario_in, const EkfSlamConfig& con
     m.gamma = eval::scaleRatio(est, truth);
     m.landmarks = s.numLandmarks();
     m.new_landmarks = static_cast<int>(rec.result.new_ids.size());
+    m.new_triangulated = rec.result.new_triangulated;
     m.rejected = static_cast<int>(rec.result.update.rejected_ids.size());
     m.composed = rec.result.composed;
     m.stationary = rec.result.zero_velocity_applied;

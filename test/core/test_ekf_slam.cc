@@ -182,13 +182,16 @@ TEST(EkfSlam, AnImuGapAddsTheMotionItMissedAsUncertainty) {
   EXPECT_LT((with_gap.navState().p_n_b - without.navState().p_n_b).norm(), 1e-9);  // same mean
 }
 
-// New tracks wait while the rig is not known to move (zero_velocity.defer_landmarks), but the
-// filter's own speed tells a walk before the parallax detector has its first window: a rig that
-// starts at 1 m/s (sigma 0.05 m/s) maps its first tracks at once, one that starts at 0 waits.
-TEST(EkfSlam, NewTracksEnterAtOnceWhenTheFilterKnowsTheRigIsWalking) {
-  EkfSlamConfig cfg;
-  ASSERT_TRUE(cfg.zero_velocity.enabled && cfg.zero_velocity.defer_landmarks);
-  auto firstFrame = [&cfg](double speed_mps) {
+// New tracks are held back while the rig is not known to move (zero_velocity.defer_landmarks), but
+// the filter's own speed tells a walk before the parallax detector has its first window: a rig that
+// starts at 1 m/s (sigma 0.05 m/s) takes its first tracks at once (into the map at the prior
+// depth, or, with the delayed entry, waiting on a clone for their baseline); one that starts at 0
+// holds them back.
+TEST(EkfSlam, NewTracksAreTakenAtOnceWhenTheFilterKnowsTheRigIsWalking) {
+  auto firstFrame = [](double speed_mps, bool triangulate) {
+    EkfSlamConfig cfg;
+    EXPECT_TRUE(cfg.zero_velocity.enabled && cfg.zero_velocity.defer_landmarks);
+    cfg.triangulation.enabled = triangulate;
     EkfSlam f(cfg, sim::paperCamera(), sim::torsoCameraExtrinsics());
     NavState init;
     init.v_n_b = Vec3(speed_mps, 0.0, 0.0);
@@ -204,10 +207,41 @@ TEST(EkfSlam, NewTracksEnterAtOnceWhenTheFilterKnowsTheRigIsWalking) {
     for (int i = 0; i < 10; ++i) frame.features.push_back({i, Eigen::Vector2d(100.0 + 40.0 * i, 200.0 + 10.0 * i)});
     const FrameResult r = f.processFrame(frame);
     EXPECT_TRUE(r.processed);
-    return std::make_pair(static_cast<int>(r.new_ids.size()), r.deferred_features);
+    EXPECT_EQ(f.landmarks().size(), r.new_ids.size());  // a clone is in the state, not in the map
+    return std::make_tuple(static_cast<int>(r.new_ids.size()), r.waiting_features, r.deferred_features);
   };
-  EXPECT_EQ(firstFrame(1.0), std::make_pair(10, 0));
-  EXPECT_EQ(firstFrame(0.0), std::make_pair(0, 10));
+  EXPECT_EQ(firstFrame(1.0, false), std::make_tuple(10, 0, 0));
+  EXPECT_EQ(firstFrame(0.0, false), std::make_tuple(0, 0, 10));
+  EXPECT_EQ(firstFrame(1.0, true), std::make_tuple(0, 10, 0));
+  EXPECT_EQ(firstFrame(0.0, true), std::make_tuple(0, 0, 10));
+}
+
+// A feature whose id is in the clones' range is refused (it would observe a clone), not mapped.
+TEST(EkfSlam, AFeatureWithACloneIdIsRefused) {
+  EkfSlamConfig cfg;
+  EkfSlam f(cfg, sim::paperCamera(), sim::torsoCameraExtrinsics());
+  NavState init;
+  init.v_n_b = Vec3(1.0, 0.0, 0.0);
+  f.initialize(init);
+  for (int k = 0; k <= 40; ++k) {
+    ImuData d;
+    d.timestamp = 0.005 * k;
+    d.am = Vec3((k % 2 ? 0.5 : -0.5), 0.0, -9.81);
+    f.addImu(d);
+  }
+  CameraFrame frame;
+  frame.timestamp = 0.05;
+  frame.features = {{1, Eigen::Vector2d(200.0, 200.0)}};
+  ASSERT_TRUE(f.processFrame(frame).processed);
+  ASSERT_EQ(f.state().numLandmarks(), 1);  // the clone track 1 waits on
+  const std::int64_t clone_id = f.state().landmarkIds()[0];
+  ASSERT_TRUE(isCloneId(clone_id));
+  frame.timestamp = 0.1;
+  frame.features = {{1, Eigen::Vector2d(201.0, 200.0)}, {clone_id, Eigen::Vector2d(300.0, 200.0)}};
+  const FrameResult r = f.processFrame(frame);
+  ASSERT_TRUE(r.processed);
+  EXPECT_EQ(r.update.accepted, 0);
+  EXPECT_TRUE(f.landmarks().empty());
 }
 
 // A dynamic initialization knows the velocity relative to its own heading, and its tilt and

@@ -23,11 +23,13 @@ struct FrameResult {
   std::string error;  ///< why the frame was not processed
   UpdateResult update;
   std::vector<std::int64_t> new_ids;
+  int new_triangulated = 0;  ///< of new_ids, those triangulated (the others entered at the prior depth)
   std::vector<std::int64_t> removed_ids;
   bool composed = false;
   StationaryDetector::Decision stationary;  ///< the standing test of this frame
   bool zero_velocity_applied = false;       ///< stationary and the zero-velocity update passed its gate
   int deferred_features = 0;                ///< new tracks kept out of the map: rig neither seen moving nor at rest
+  int waiting_features = 0;                 ///< new tracks waiting for the baseline that triangulates them
   std::string lost;  ///< non-empty: the filter is lost (DivergenceMonitor) and should be reset; why
 };
 
@@ -110,6 +112,11 @@ class EkfSlam {
   std::vector<std::int64_t> makeRoomInTheMap(double t, int wanted);
   /// New landmarks from the fresh tracks (up to max_landmarks); returns their ids.
   std::vector<std::int64_t> addLandmarks(const std::vector<FeatureObservation>& fresh, double t);
+  /// The same through the delayed entry: triangulated tracks, then those that waited too long at
+  /// the prior depth (unless `defer`). Fills new_ids, removed_ids and the counts of r.
+  void addLandmarksDelayed(const std::vector<FeatureObservation>& fresh, double t, bool defer, FrameResult* r);
+  /// New tracks wait for a baseline (config().triangulation, for inverse depth composed after every update).
+  bool triangulationActive() const;
 
   void removeLandmarksById(const std::vector<std::int64_t>& ids);
   bool initializeLandmark(const FeatureObservation& obs, double inverse_depth_initial_m);
@@ -138,6 +145,7 @@ class EkfSlam {
   int zero_velocity_updates_ = 0;
   StationaryDetector stationary_;
   DivergenceMonitor divergence_;
+  DelayedLandmarks delayed_;
   bool seen_moving_ = false;  ///< parallax reached moving_parallax_px since the last stand (or start)
 };
 

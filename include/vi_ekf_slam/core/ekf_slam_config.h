@@ -4,6 +4,7 @@
 #include <optional>
 #include <string>
 
+#include "vi_ekf_slam/core/delayed_landmarks.h"
 #include "vi_ekf_slam/core/divergence_monitor.h"
 #include "vi_ekf_slam/core/ekf_update.h"
 #include "vi_ekf_slam/core/imu_propagation.h"
@@ -78,6 +79,9 @@ struct EkfSlamConfig {
   /// unchanged. A bedroom's points at 0.5-2 m are then inside their own prior; a hallway's stay
   /// near its median depth.
   bool inverse_depth_scene_prior = true;
+  /// inverse depth, composition after every update: new tracks wait for the baseline that
+  /// triangulates them (delayed_landmarks.h) instead of entering at the prior depth at once.
+  TriangulationParams triangulation;
   int max_landmarks = 150;          ///< map size bound
   double landmark_timeout_s = 0.5;  ///< drop landmarks not observed for this long [s]; <0: never
   double max_imu_gap_s = 0.1;       ///< IMU intervals longer than this are gaps [s]

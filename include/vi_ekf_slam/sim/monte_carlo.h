@@ -29,6 +29,7 @@ struct FrameMetrics {
   double gamma = 0.0;  ///< eq. (34) over the landmarks in the map
   int landmarks = 0;
   int new_landmarks = 0;
+  int new_triangulated = 0;  ///< of those, entered at the depth their baseline gave
   int rejected = 0;
   bool composed = false;
   bool stationary = false;   ///< the filter detected standing (zero-velocity update applied)
