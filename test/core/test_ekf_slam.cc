@@ -182,6 +182,22 @@ TEST(EkfSlam, AnImuGapAddsTheMotionItMissedAsUncertainty) {
   EXPECT_LT((with_gap.navState().p_n_b - without.navState().p_n_b).norm(), 1e-9);  // same mean
 }
 
+namespace {
+/// A filter started at `speed_mps` along x, and IMU samples to `until_s` with a hand's jitter (the
+/// IMU does not show rest).
+void startWalkingWithJitter(EkfSlam& f, double speed_mps, double until_s) {
+  NavState init;
+  init.v_n_b = Vec3(speed_mps, 0.0, 0.0);
+  f.initialize(init);
+  for (int k = 0; 0.005 * k <= until_s + 1e-9; ++k) {
+    ImuData d;
+    d.timestamp = 0.005 * k;
+    d.am = Vec3((k % 2 ? 0.5 : -0.5), 0.0, -9.81);
+    EXPECT_TRUE(f.addImu(d));
+  }
+}
+}  // namespace
+
 // New tracks are held back while the rig is not known to move (zero_velocity.defer_landmarks), but
 // the filter's own speed tells a walk before the parallax detector has its first window: a rig that
 // starts at 1 m/s (sigma 0.05 m/s) takes its first tracks at once (into the map at the prior
@@ -193,15 +209,7 @@ TEST(EkfSlam, NewTracksAreTakenAtOnceWhenTheFilterKnowsTheRigIsWalking) {
     EXPECT_TRUE(cfg.zero_velocity.enabled && cfg.zero_velocity.defer_landmarks);
     cfg.triangulation.enabled = triangulate;
     EkfSlam f(cfg, sim::paperCamera(), sim::torsoCameraExtrinsics());
-    NavState init;
-    init.v_n_b = Vec3(speed_mps, 0.0, 0.0);
-    f.initialize(init);
-    for (int k = 0; k <= 12; ++k) {  // a hand's jitter: the IMU does not show rest
-      ImuData d;
-      d.timestamp = 0.005 * k;
-      d.am = Vec3((k % 2 ? 0.5 : -0.5), 0.0, -9.81);
-      EXPECT_TRUE(f.addImu(d));
-    }
+    startWalkingWithJitter(f, speed_mps, 0.06);
     CameraFrame frame;
     frame.timestamp = 0.05;
     for (int i = 0; i < 10; ++i) frame.features.push_back({i, Eigen::Vector2d(100.0 + 40.0 * i, 200.0 + 10.0 * i)});
@@ -220,15 +228,7 @@ TEST(EkfSlam, NewTracksAreTakenAtOnceWhenTheFilterKnowsTheRigIsWalking) {
 TEST(EkfSlam, AFeatureWithACloneIdIsRefused) {
   EkfSlamConfig cfg;
   EkfSlam f(cfg, sim::paperCamera(), sim::torsoCameraExtrinsics());
-  NavState init;
-  init.v_n_b = Vec3(1.0, 0.0, 0.0);
-  f.initialize(init);
-  for (int k = 0; k <= 40; ++k) {
-    ImuData d;
-    d.timestamp = 0.005 * k;
-    d.am = Vec3((k % 2 ? 0.5 : -0.5), 0.0, -9.81);
-    f.addImu(d);
-  }
+  startWalkingWithJitter(f, 1.0, 0.2);
   CameraFrame frame;
   frame.timestamp = 0.05;
   frame.features = {{1, Eigen::Vector2d(200.0, 200.0)}};
