@@ -464,6 +464,8 @@ bool EkfSlam::setConfig(const EkfSlamConfig& config, std::string* error) {
   config_ = config;
   g_n_ = gravityInNav(config_.gravity_mps2);
   if (config.mechanization != previous) setMechanization(config.mechanization);
+  // Waiting switched off (or no longer possible): the tracks start again as new ones, the clones go.
+  if (!triangulationActive()) delayed_.clear(&state_);
   return true;
 }
 

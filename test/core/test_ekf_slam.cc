@@ -244,6 +244,27 @@ TEST(EkfSlam, AFeatureWithACloneIdIsRefused) {
   EXPECT_TRUE(f.landmarks().empty());
 }
 
+// Reconfigured to enter new tracks at once (or to a layout without the delay), the filter drops
+// its clones: none is left in the state, unobserved, for good.
+TEST(EkfSlam, SwitchingTheDelayedEntryOffRemovesTheClones) {
+  EkfSlamConfig cfg;
+  EkfSlam f(cfg, sim::paperCamera(), sim::torsoCameraExtrinsics());
+  startWalkingWithJitter(f, 1.0, 0.2);
+  CameraFrame frame;
+  frame.timestamp = 0.05;
+  frame.features = {{1, Eigen::Vector2d(200.0, 200.0)}, {2, Eigen::Vector2d(400.0, 300.0)}};
+  ASSERT_TRUE(f.processFrame(frame).processed);
+  ASSERT_EQ(f.state().numLandmarks(), 1);  // the clone both tracks wait on
+  cfg.triangulation.enabled = false;
+  ASSERT_TRUE(f.setConfig(cfg));
+  EXPECT_EQ(f.state().numLandmarks(), 0);
+  frame.timestamp = 0.1;
+  const FrameResult r = f.processFrame(frame);
+  ASSERT_TRUE(r.processed);
+  EXPECT_EQ(r.new_ids.size(), 2u);  // entered at the prior depth, as without the delay
+  EXPECT_EQ(f.state().numLandmarks(), 2);
+}
+
 // A dynamic initialization knows the velocity relative to its own heading, and its tilt and
 // accelerometer bias together: the initial covariance carries its [v, psi, b_a] block (yaw from
 // the prior) and the v x yaw correlation (else vision would "observe" the yaw from the velocity).
