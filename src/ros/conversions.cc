@@ -196,6 +196,7 @@ vi_ekf_slam::FilterStatus toFilterStatus(const EkfSlam& filter, const NavState& 
   s.tracks = x.tracks;
   s.new_landmarks = static_cast<int>(r.new_ids.size());
   s.deferred_features = r.deferred_features;
+  s.waiting_features = r.waiting_features;
   s.removed_landmarks = static_cast<int>(r.removed_ids.size());
   s.accepted_observations = r.update.accepted;
   s.rejected_observations = static_cast<int>(r.update.rejected_ids.size());

@@ -226,6 +226,11 @@ TEST(ProcessorStream, ACoveredCameraIsRiddenThrough) {
   const StreamRun r = runStream(rig("camera_covered", 10.0), testParams());
   check(r, {.max_final_error_m = 0.15});
   EXPECT_GT(r.counters.images_without_features, 0);
+  // The tracks that start while it walks (after the stand, after the cover) wait for their
+  // baseline, and status says how many.
+  int max_waiting = 0;
+  for (const auto& st : r.out.statuses) max_waiting = std::max(max_waiting, st.waiting_features);
+  EXPECT_GT(max_waiting, 0);
 }
 
 TEST(ProcessorStream, ABurstOfOutlierTracksIsGatedOut) {
