@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <unordered_set>
 
 #include "vi_ekf_slam/core/chi_squared.h"
 
@@ -12,6 +13,17 @@ const CameraClone* DelayedLandmarks::findClone(std::int64_t id) const {
     if (c.id == id) return &c;
   }
   return nullptr;
+}
+
+template <typename Pred>
+void DelayedLandmarks::removeClonesIf(FilterState* state, Pred remove) {
+  std::vector<int> indices;
+  for (const auto& c : clones_) {
+    if (!remove(c) || !state) continue;
+    if (auto i = state->findLandmark(c.id)) indices.push_back(*i);
+  }
+  clones_.erase(std::remove_if(clones_.begin(), clones_.end(), remove), clones_.end());
+  if (state) state->removeLandmarks(indices);
 }
 
 DelayedLandmarks::Selection DelayedLandmarks::select(const FilterState& state,
@@ -52,13 +64,9 @@ DelayedLandmarks::Selection DelayedLandmarks::select(const FilterState& state,
   const int take = std::min<int>(static_cast<int>(waited.size()), fill - static_cast<int>(out.triangulated.size()));
   for (int i = 0; i < take && waited[static_cast<size_t>(i)].first >= params.starved_max_wait_s; ++i) {
     out.expired.push_back(waited[static_cast<size_t>(i)].second);
+    still.erase(out.expired.back().id);
   }
-  // Tracks ready or expired stay listed until commit(); the lost ones are forgotten now.
-  for (const auto& r : out.triangulated) still.emplace(r.obs.id, waiting_.at(r.obs.id));
-  for (const auto& e : out.expired) {
-    if (waiting_.count(e.id)) still.emplace(e.id, waiting_.at(e.id));
-  }
-  waiting_ = std::move(still);
+  waiting_ = std::move(still);  // without the lost, the selected and the forgotten
   return out;
 }
 
@@ -67,18 +75,17 @@ std::vector<std::int64_t> DelayedLandmarks::commit(FilterState& state, const Sel
                                                    const CameraExtrinsics& T_b_c, const TriangulationParams& params) {
   std::vector<std::int64_t> added;
   for (const auto& r : selection.triangulated) {
-    waiting_.erase(r.obs.id);
     const CameraClone* clone = findClone(r.clone_id);
     if (static_cast<int>(added.size()) >= capacity || !clone || state.findLandmark(r.obs.id)) continue;
     appendTriangulatedLandmark(state, r.obs.id, *clone, r.landmark);
     added.push_back(r.obs.id);
   }
-  for (const auto& e : selection.expired) waiting_.erase(e.id);
-  // Fresh tracks that wait on nothing yet (new, or handed back) start waiting on a clone of now.
+  // Fresh tracks that wait on nothing yet (new, or not entered above) start waiting on a clone of
+  // now. The expired may enter at the prior depth now; else they start again at the next image.
   std::vector<const FeatureObservation*> unattached;
-  if (selection.wait) {  // (the expired may enter at the prior depth now; else they start again next image)
-    std::unordered_map<std::int64_t, bool> expired;
-    for (const auto& e : selection.expired) expired[e.id] = true;
+  if (selection.wait) {
+    std::unordered_set<std::int64_t> expired;
+    for (const auto& e : selection.expired) expired.insert(e.id);
     for (const auto& f : fresh) {
       if (!waiting_.count(f.id) && !expired.count(f.id) && !state.findLandmark(f.id)) unattached.push_back(&f);
     }
@@ -91,18 +98,9 @@ std::vector<std::int64_t> DelayedLandmarks::commit(FilterState& state, const Sel
     for (const auto* f : unattached) waiting_[f->id] = {clones_.back().id, f->uv};
   }
   // Clones no track waits on leave the state.
-  std::vector<int> unused;
-  for (auto it = clones_.begin(); it != clones_.end();) {
-    const bool used =
-        std::any_of(waiting_.begin(), waiting_.end(), [&](const auto& w) { return w.second.clone_id == it->id; });
-    if (used) {
-      ++it;
-      continue;
-    }
-    if (auto i = state.findLandmark(it->id)) unused.push_back(*i);
-    it = clones_.erase(it);
-  }
-  state.removeLandmarks(unused);
+  removeClonesIf(&state, [&](const CameraClone& c) {
+    return std::none_of(waiting_.begin(), waiting_.end(), [&](const auto& w) { return w.second.clone_id == c.id; });
+  });
   return added;
 }
 
@@ -120,15 +118,8 @@ void DelayedLandmarks::beforeComposition(const FilterState& state) {
 }
 
 void DelayedLandmarks::clear(FilterState* state) {
-  if (state) {
-    std::vector<int> indices;
-    for (const auto& c : clones_) {
-      if (auto i = state->findLandmark(c.id)) indices.push_back(*i);
-    }
-    state->removeLandmarks(indices);
-  }
+  removeClonesIf(state, [](const CameraClone&) { return true; });
   waiting_.clear();
-  clones_.clear();
 }
 
 }  // namespace vi_ekf_slam

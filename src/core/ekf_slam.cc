@@ -427,8 +427,8 @@ void EkfSlam::addLandmarksDelayed(const std::vector<FeatureObservation>& fresh, 
   DelayedLandmarks::Selection sel =
       delayed_.select(state_, fresh, camera_, T_b_c_, config_.triangulation, pixel_var, config_.update.gate_probability,
                       wait, config_.triangulation.min_map_landmarks - (state_.numLandmarks() - delayed_.clones()));
-  // Those that waited too long enter at the prior depth, as without the delay, unless the rig is
-  // not seen moving (then they wait on, on a new clone).
+  // The expired (not waiting, or taken by a map short of landmarks) enter at the prior depth, as
+  // without the delay, unless the zero-velocity rules hold new tracks back.
   std::vector<FeatureObservation> at_prior;
   if (defer) {
     r->deferred_features = static_cast<int>(sel.expired.size());

@@ -196,6 +196,18 @@ void startWalkingWithJitter(EkfSlam& f, double speed_mps, double until_s) {
     EXPECT_TRUE(f.addImu(d));
   }
 }
+
+/// The first image (at 0.05 s) of a rig walking at 1 m/s: its tracks start waiting; the state's
+/// only "landmarks" are clones.
+CameraFrame firstImageWhileWalking(EkfSlam& f, std::vector<FeatureObservation> features) {
+  startWalkingWithJitter(f, 1.0, 0.2);
+  CameraFrame frame;
+  frame.timestamp = 0.05;
+  frame.features = std::move(features);
+  EXPECT_TRUE(f.processFrame(frame).processed);
+  for (auto id : f.state().landmarkIds()) EXPECT_TRUE(isCloneId(id));
+  return frame;
+}
 }  // namespace
 
 // New tracks are held back while the rig is not known to move (zero_velocity.defer_landmarks), but
@@ -228,14 +240,9 @@ TEST(EkfSlam, NewTracksAreTakenAtOnceWhenTheFilterKnowsTheRigIsWalking) {
 TEST(EkfSlam, AFeatureWithACloneIdIsRefused) {
   EkfSlamConfig cfg;
   EkfSlam f(cfg, sim::paperCamera(), sim::torsoCameraExtrinsics());
-  startWalkingWithJitter(f, 1.0, 0.2);
-  CameraFrame frame;
-  frame.timestamp = 0.05;
-  frame.features = {{1, Eigen::Vector2d(200.0, 200.0)}};
-  ASSERT_TRUE(f.processFrame(frame).processed);
+  CameraFrame frame = firstImageWhileWalking(f, {{1, Eigen::Vector2d(200.0, 200.0)}});
   ASSERT_EQ(f.state().numLandmarks(), 1);  // the clone track 1 waits on
   const std::int64_t clone_id = f.state().landmarkIds()[0];
-  ASSERT_TRUE(isCloneId(clone_id));
   frame.timestamp = 0.1;
   frame.features = {{1, Eigen::Vector2d(201.0, 200.0)}, {clone_id, Eigen::Vector2d(300.0, 200.0)}};
   const FrameResult r = f.processFrame(frame);
@@ -249,11 +256,8 @@ TEST(EkfSlam, AFeatureWithACloneIdIsRefused) {
 TEST(EkfSlam, SwitchingTheDelayedEntryOffRemovesTheClones) {
   EkfSlamConfig cfg;
   EkfSlam f(cfg, sim::paperCamera(), sim::torsoCameraExtrinsics());
-  startWalkingWithJitter(f, 1.0, 0.2);
-  CameraFrame frame;
-  frame.timestamp = 0.05;
-  frame.features = {{1, Eigen::Vector2d(200.0, 200.0)}, {2, Eigen::Vector2d(400.0, 300.0)}};
-  ASSERT_TRUE(f.processFrame(frame).processed);
+  CameraFrame frame =
+      firstImageWhileWalking(f, {{1, Eigen::Vector2d(200.0, 200.0)}, {2, Eigen::Vector2d(400.0, 300.0)}});
   ASSERT_EQ(f.state().numLandmarks(), 1);  // the clone both tracks wait on
   cfg.triangulation.enabled = false;
   ASSERT_TRUE(f.setConfig(cfg));

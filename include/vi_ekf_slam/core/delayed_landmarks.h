@@ -83,6 +83,9 @@ class DelayedLandmarks {
     Eigen::Vector2d uv_clone;
   };
   const CameraClone* findClone(std::int64_t id) const;
+  /// Forgets the clones `remove` picks, and takes them out of `state` if given.
+  template <typename Pred>
+  void removeClonesIf(FilterState* state, Pred remove);
 
   std::unordered_map<std::int64_t, Waiting> waiting_;
   std::vector<CameraClone> clones_;

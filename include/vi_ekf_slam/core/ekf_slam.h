@@ -112,8 +112,9 @@ class EkfSlam {
   std::vector<std::int64_t> makeRoomInTheMap(double t, int wanted);
   /// New landmarks from the fresh tracks (up to max_landmarks); returns their ids.
   std::vector<std::int64_t> addLandmarks(const std::vector<FeatureObservation>& fresh, double t);
-  /// The same through the delayed entry: triangulated tracks, then those that waited too long at
-  /// the prior depth (unless `defer`). Fills new_ids, removed_ids and the counts of r.
+  /// The same through the delayed entry: triangulated tracks, then the expired ones (not waiting,
+  /// or taken by a short map) at the prior depth (unless `defer`). Fills new_ids, removed_ids and
+  /// the counts of r.
   void addLandmarksDelayed(const std::vector<FeatureObservation>& fresh, double t, bool defer, FrameResult* r);
   /// New tracks wait for a baseline (config().triangulation, for inverse depth composed after every update).
   bool triangulationActive() const;
