@@ -634,25 +634,44 @@ std::optional<DynamicInitResult> DynamicInitializer::tryInitialize(std::string* 
   r.state.v_n_b = y_out.v_n;
   r.state.b_a = y.tail<3>();
   r.covariance = cov_out;
-  // The features of the last frame, with the depth uncertainty of the alignment (the marginal of
-  // each p_f), scaled up as the velocity's by what the alignment takes as known (a scale error).
+  // The features of the last frame with their inverse depth rho = 1 / z in the last camera. To
+  // first order rho_j = g_j dy + a_j e_j: a_j = d rho / d p_f, e_j the feature's own error (p_f
+  // given y; covariance sigma^2 Hff^-1) and g_j the share of the window's [v0, g, b_a] error dy
+  // (covariance sigma^2 S^-1), through the feature (p_f follows y by -Hff^-1 Hfy dy) and through
+  // the last camera's position p_K(y). The shared part is the scale: taken as independent per
+  // landmark, tens of landmarks would "know" it several times better than the alignment does.
+  // Scaled up as the velocity by what the alignment takes as known (a scale error).
   const double inflate = sigma_v_ls > 0.0 ? sigma_v / sigma_v_ls : 1.0;
   const MatY S_inv = (S + 1e-12 * MatY::Identity()).inverse();
   const double sigma_n2 = std::pow(sigma_px / f_px, 2);
   const int last = static_cast<int>(times.size()) - 1;
   const Mat3 R_cK = R_c_b * PK.R.transpose();
+  Mat3Y dpK_dy;  // d p_K / d y
+  dpK_dy << t_K * Mat3::Identity(), 0.5 * t_K * t_K * Mat3::Identity(), PK.A;
+  std::vector<Eigen::Matrix<double, 1, 9>> shared;
+  std::vector<double> own_var;
   for (int j = 0; j < M; ++j) {
     const std::vector<Obs>& obs = *used[static_cast<size_t>(j)];
     if (!active[static_cast<size_t>(j)] || obs.back().frame != last) continue;
     const Vec3 pc = cameraPoint(last, p_f[j], y);
-    const Mat3 cov_f = sigma_n2 * (Hff_inv[j] + Hff_inv[j] * Hfy[j] * S_inv * Hfy[j].transpose() * Hff_inv[j]);
-    const double var_z = (R_cK * cov_f * R_cK.transpose())(2, 2);
+    const Eigen::RowVector3d a = -R_cK.row(2) / (pc.z() * pc.z());
+    shared.push_back(-a * dpK_dy - a * Hff_inv[j] * Hfy[j]);
+    own_var.push_back(sigma_n2 * a * Hff_inv[j] * a.transpose());
     DynamicInitLandmark l;
     l.id = ids[&obs];
     l.uv = obs.back().uv;
     l.depth_m = pc.z();
-    l.inverse_depth_sigma = inflate * std::sqrt(std::max(0.0, var_z)) / (pc.z() * pc.z());
     r.landmarks.push_back(l);
+  }
+  const int n = static_cast<int>(r.landmarks.size());
+  Eigen::Matrix<double, Eigen::Dynamic, 9> Gs(n, 9);
+  for (int i = 0; i < n; ++i) Gs.row(i) = shared[static_cast<size_t>(i)];
+  r.landmark_covariance = inflate * inflate * sigma_n2 * Gs * S_inv * Gs.transpose();
+  for (int i = 0; i < n; ++i) r.landmark_covariance(i, i) += inflate * inflate * own_var[static_cast<size_t>(i)];
+  r.landmark_state_covariance = inflate * sigma_n2 * Gs * S_inv * J_out.transpose();
+  for (int i = 0; i < n; ++i) {
+    DynamicInitLandmark& l = r.landmarks[static_cast<size_t>(i)];
+    l.inverse_depth_sigma = std::sqrt(std::max(0.0, r.landmark_covariance(i, i)));
     // The scene's depth from the features whose depth the window determined (to 50%): without
     // parallax (a rig at rest) the depths are arbitrary.
     if (l.inverse_depth_sigma * l.depth_m < 0.5) last_depths.push_back(l.depth_m);

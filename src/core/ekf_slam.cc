@@ -47,7 +47,11 @@ void EkfSlam::initialize(const NavState& init) { initialize(init, config_.initia
 
 void EkfSlam::initialize(const NavState& init, const InitialUncertainty& u, double scene_depth_m,
                          std::optional<double> time_offset_s) {
-  scene_depth_hint_m_ = scene_depth_m > 0.0 && std::isfinite(scene_depth_m) ? scene_depth_m : 0.0;
+  start(startingState(init, u, time_offset_s), scene_depth_m);
+}
+
+FilterState EkfSlam::startingState(const NavState& init, const InitialUncertainty& u,
+                                   std::optional<double> time_offset_s) const {
   using namespace idx;
   // Start world-centric: the initial pose uncertainty is the registration error in {n}.
   FilterState s(Mechanization::kWorldCentric);
@@ -85,12 +89,19 @@ void EkfSlam::initialize(const NavState& init, const InitialUncertainty& u, doub
     P = J * P * J.transpose();
   }
   s.setCovariance(P);
+  return s;
+}
+
+void EkfSlam::start(FilterState s, double scene_depth_m) {
+  scene_depth_hint_m_ = scene_depth_m > 0.0 && std::isfinite(scene_depth_m) ? scene_depth_m : 0.0;
   // Sensor-centric: {s} := initial body frame; the pose in {s} is exact and the registration
   // uncertainty moves to p_n_s, q_n_s (the same frame change as a mechanization switch).
   if (isSensorCentric(config_.mechanization)) switchMechanization(s, config_.mechanization);
   state_ = std::move(s);
   delayed_.clear(nullptr);
   last_seen_.clear();
+  for (int i = 0; i < state_.numLandmarks(); ++i)
+    last_seen_[state_.landmarkIds()[static_cast<size_t>(i)]] = state_.timestamp;
   stationary_.reset();
   divergence_.reset();
   seen_moving_ = false;
@@ -98,7 +109,7 @@ void EkfSlam::initialize(const NavState& init, const InitialUncertainty& u, doub
   zero_velocity_updates_ = 0;
   initialized_ = true;
   // Samples older than the start are of no use any more, except the one just before it.
-  while (imu_.size() > 1 && imu_[1].timestamp <= init.timestamp) imu_.pop_front();
+  while (imu_.size() > 1 && imu_[1].timestamp <= state_.timestamp) imu_.pop_front();
 }
 
 bool EkfSlam::addImu(const ImuData& imu) {
@@ -188,6 +199,7 @@ void EkfSlam::addGapUncertainty(FilterState& s, double dt) const {
 }
 
 int EkfSlam::initialize(const DynamicInitResult& aligned, const NavState& registered) {
+  using namespace idx;
   InitialUncertainty u = aligned.uncertainty(config_.initial);
   // The registration turned the aligned state about {n}'s z axis: so are its v and psi.
   const Mat3 R_z = (registered.q_n_b * aligned.state.q_n_b.conjugate()).toRotationMatrix();
@@ -195,32 +207,48 @@ int EkfSlam::initialize(const DynamicInitResult& aligned, const NavState& regist
   T.block<3, 3>(0, 0) = R_z;
   T.block<3, 3>(3, 3) = R_z;
   u.velocity_attitude_accel_bias = T * aligned.covariance * T.transpose();
-  initialize(registered, u, aligned.median_depth_m, config_.camera_time_offset_s + aligned.time_offset_correction_s);
+  FilterState s = startingState(registered, u, config_.camera_time_offset_s + aligned.time_offset_correction_s);
   // The aligned features enter with the depth the alignment found (their first updates are then
   // nearly linear) when it knows it better than a new track's prior; the others later as any new
-  // track.
-  int added = 0;
-  for (const auto& l : aligned.landmarks) {
-    if (l.inverse_depth_sigma < config_.inverse_depth_sigma) {
-      added += addLandmark(l.id, l.uv, l.depth_m, l.inverse_depth_sigma);
+  // track. They enter together: one error of the window's scale moves all their depths and the
+  // velocity (taken as independent, tens of landmarks would know the scale far better than the
+  // alignment does), and each carries its anchor's registration error as any new landmark.
+  std::vector<FeatureObservation> obs;
+  std::vector<double> depths;
+  std::vector<int> candidates;  // indices into aligned.landmarks
+  const auto n = static_cast<Eigen::Index>(aligned.landmarks.size());
+  const bool joint = aligned.landmark_covariance.rows() == n && aligned.landmark_covariance.cols() == n &&
+                     aligned.landmark_state_covariance.rows() == n;
+  for (int j = 0; j < static_cast<int>(n); ++j) {
+    const DynamicInitLandmark& l = aligned.landmarks[static_cast<size_t>(j)];
+    if (static_cast<int>(obs.size()) >= config_.max_landmarks) break;
+    if (!(l.inverse_depth_sigma > 0.0 && l.inverse_depth_sigma < config_.inverse_depth_sigma) || !(l.depth_m > 0.0) ||
+        !std::isfinite(l.depth_m)) {
+      continue;
     }
+    obs.push_back({l.id, l.uv});
+    depths.push_back(l.depth_m);
+    candidates.push_back(j);
   }
+  // Their inverse depths' joint covariance, and its cross-covariance with [v, psi, b_a] turned as
+  // the registration turned them (yaw: none).
+  const auto m = static_cast<Eigen::Index>(candidates.size());
+  Eigen::MatrixXd Q = Eigen::MatrixXd::Zero(m, m), C = Eigen::MatrixXd::Zero(m, s.dim());
+  for (Eigen::Index a = 0; a < m; ++a) {
+    const int ja = candidates[static_cast<size_t>(a)];
+    Q(a, a) = std::pow(aligned.landmarks[static_cast<size_t>(ja)].inverse_depth_sigma, 2);
+    if (!joint) continue;
+    for (Eigen::Index b = 0; b < m; ++b) Q(a, b) = aligned.landmark_covariance(ja, candidates[static_cast<size_t>(b)]);
+    const Eigen::Matrix<double, 1, 9> c = aligned.landmark_state_covariance.row(ja) * T.transpose();
+    C.block<1, 3>(a, kV) = c.segment<3>(0);
+    C.block<1, 3>(a, kPsi) = c.segment<3>(3);
+    C.block<1, 3>(a, kBa) = c.segment<3>(6);
+  }
+  const int added = static_cast<int>(
+      initializeLandmarksInverseDepthJointly(s, obs, depths, Q, C, camera_, T_b_c_, config_.update.pixel_noise_px)
+          .size());
+  start(std::move(s), aligned.median_depth_m);
   return added;
-}
-
-bool EkfSlam::addLandmark(std::int64_t id, const Eigen::Vector2d& uv, double depth_m, double inverse_depth_sigma) {
-  if (!initialized_ || state_.findLandmark(id) || state_.numLandmarks() >= config_.max_landmarks) return false;
-  if (!(depth_m > 0.0) || !std::isfinite(depth_m) || !(inverse_depth_sigma > 0.0) ||
-      !std::isfinite(inverse_depth_sigma)) {
-    return false;
-  }
-  InverseDepthParams p;
-  p.initial_depth_m = depth_m;
-  p.inverse_depth_sigma = inverse_depth_sigma;
-  p.pixel_noise_px = config_.update.pixel_noise_px;
-  if (!initializeLandmarkInverseDepth(state_, {id, uv}, camera_, T_b_c_, p)) return false;
-  last_seen_[id] = state_.timestamp;
-  return true;
 }
 
 double EkfSlam::newLandmarkDepth() const {

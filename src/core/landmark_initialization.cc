@@ -1,5 +1,7 @@
 #include "vi_ekf_slam/core/landmark_initialization.h"
 
+#include <stdexcept>
+
 #include "vi_ekf_slam/core/matrix_utils.h"
 
 namespace vi_ekf_slam {
@@ -47,22 +49,86 @@ void appendInitializedLandmark(FilterState& state, std::int64_t id, const Initia
   appendTransformed(state, id, Landmark::cartesian(l.p_s_l), l, Mat3::Identity(), pixel_var, l.G_depth, depth_var);
 }
 
+namespace {
+/// The inverse-depth landmark of back-projected point l, anchored at the estimated camera frame.
+Landmark anchoredInverseDepth(const MotionState& x, const InitializedLandmark& l, const CameraExtrinsics& T_b_c) {
+  Landmark lm;
+  lm.kind = LandmarkKind::kInverseDepth;
+  lm.R_s_a = x.q_s_b.toRotationMatrix() * T_b_c.R_b_c;
+  lm.p_s_a = x.p_s_b + x.q_s_b * T_b_c.p_b_c;
+  const Vec3 p_a = lm.R_s_a.transpose() * (l.p_s_l - lm.p_s_a);
+  lm.l = Vec3(p_a.x() / p_a.z(), p_a.y() / p_a.z(), 1.0 / p_a.z());
+  return lm;
+}
+}  // namespace
+
 bool initializeLandmarkInverseDepth(FilterState& state, const FeatureObservation& obs, const CameraModel& camera,
                                     const CameraExtrinsics& T_b_c, const InverseDepthParams& params) {
   InitializedLandmark l;
   if (!backProject(state.x, obs.uv, params.initial_depth_m, camera, T_b_c, &l)) return false;
   // Anchor: the estimated camera frame; l = (u, v, rho) of the same point in it.
-  Landmark lm;
-  lm.kind = LandmarkKind::kInverseDepth;
-  lm.R_s_a = state.x.q_s_b.toRotationMatrix() * T_b_c.R_b_c;
-  lm.p_s_a = state.x.p_s_b + state.x.q_s_b * T_b_c.p_b_c;
-  const Vec3 p_a = lm.R_s_a.transpose() * (l.p_s_l - lm.p_s_a);
-  lm.l = Vec3(p_a.x() / p_a.z(), p_a.y() / p_a.z(), 1.0 / p_a.z());
+  const Landmark lm = anchoredInverseDepth(state.x, l, T_b_c);
   // Pose and pixel errors map through dl/dY; the depth prior is a variance on rho alone.
   const double sigma = params.inverse_depth_sigma;
   appendTransformed(state, obs.id, lm, l, lm.paramsFromPointJacobian(), params.pixel_noise_px * params.pixel_noise_px,
                     Vec3::UnitZ(), sigma * sigma);
   return true;
+}
+
+std::vector<int> initializeLandmarksInverseDepthJointly(FilterState& state, const std::vector<FeatureObservation>& obs,
+                                                        const std::vector<double>& depth_m, const Eigen::MatrixXd& Q,
+                                                        const Eigen::MatrixXd& C, const CameraModel& camera,
+                                                        const CameraExtrinsics& T_b_c, double pixel_noise_px) {
+  const auto n = static_cast<Eigen::Index>(obs.size());
+  const int d0 = state.dim();
+  if (static_cast<Eigen::Index>(depth_m.size()) != n || Q.rows() != n || Q.cols() != n || C.rows() != n ||
+      C.cols() != d0) {
+    throw std::invalid_argument("initializeLandmarksInverseDepthJointly: Q must be n x n and C n x dim()");
+  }
+  std::vector<int> entered;
+  std::vector<Landmark> lms;
+  std::vector<InitializedLandmark> rays;
+  for (int i = 0; i < static_cast<int>(n); ++i) {
+    InitializedLandmark l;
+    if (state.findLandmark(obs[static_cast<size_t>(i)].id) ||
+        !backProject(state.x, obs[static_cast<size_t>(i)].uv, depth_m[static_cast<size_t>(i)], camera, T_b_c, &l)) {
+      continue;
+    }
+    entered.push_back(i);
+    rays.push_back(l);
+    lms.push_back(anchoredInverseDepth(state.x, l, T_b_c));
+  }
+  const auto m = static_cast<Eigen::Index>(entered.size());
+  // z = [state error; the m inverse-depth errors] with covariance Z; the new entries are
+  // l = A z + (pixel errors): l_i = D_i (G_p dp + G_psi dpsi) + e_z rho_i.
+  Eigen::MatrixXd Z(d0 + m, d0 + m);
+  Z.topLeftCorner(d0, d0) = state.covariance();
+  Eigen::MatrixXd A = Eigen::MatrixXd::Zero(3 * m, d0 + m);
+  Eigen::MatrixXd pixel = Eigen::MatrixXd::Zero(3 * m, 3 * m);
+  const double pixel_var = pixel_noise_px * pixel_noise_px;
+  for (Eigen::Index a = 0; a < m; ++a) {
+    const auto ia = static_cast<Eigen::Index>(entered[static_cast<size_t>(a)]);
+    Z.block(d0 + a, 0, 1, d0) = C.row(ia);
+    Z.block(0, d0 + a, d0, 1) = C.row(ia).transpose();
+    for (Eigen::Index b = 0; b < m; ++b)
+      Z(d0 + a, d0 + b) = Q(ia, static_cast<Eigen::Index>(entered[static_cast<size_t>(b)]));
+    const Mat3 D = lms[static_cast<size_t>(a)].paramsFromPointJacobian();
+    const InitializedLandmark& l = rays[static_cast<size_t>(a)];
+    A.block<3, 3>(3 * a, idx::kP) = D * l.G_p;
+    A.block<3, 3>(3 * a, idx::kPsi) = D * l.G_psi;
+    A(3 * a + 2, d0 + a) = 1.0;
+    const Eigen::Matrix<double, 3, 2> DG_uv = D * l.G_uv;
+    pixel.block<3, 3>(3 * a, 3 * a) = pixel_var * DG_uv * DG_uv.transpose();
+  }
+  const Eigen::MatrixXd X = A * Z.leftCols(d0);             // new entries x state
+  const Eigen::MatrixXd L = A * Z * A.transpose() + pixel;  // new entries x new entries
+  for (Eigen::Index a = 0; a < m; ++a) {
+    Eigen::MatrixXd P_l_state(3, d0 + 3 * a);
+    P_l_state << X.middleRows(3 * a, 3), L.block(3 * a, 0, 3, 3 * a);
+    state.appendLandmark(obs[static_cast<size_t>(entered[static_cast<size_t>(a)])].id, lms[static_cast<size_t>(a)],
+                         L.block<3, 3>(3 * a, 3 * a), P_l_state);
+  }
+  return entered;
 }
 
 bool initializeLandmarkFixedDepth(FilterState& state, const FeatureObservation& obs, const CameraModel& camera,

@@ -138,3 +138,74 @@ TEST(Landmark, InverseDepthJacobiansAreInversesAndMatchNumeric) {
       3);
   EXPECT_LT(test::maxAbs(Mn - M), 1e-7);
 }
+
+// Landmarks whose inverse depths an initializer estimated together with the state: the covariance
+// is the first-order propagation of [state error, inverse-depth errors] (jointly Gaussian, with
+// the given cross-covariance) and the pixel noise, through the numerical Jacobian of the exact map.
+TEST(LandmarkInit, JointInverseDepthsAreFirstOrderPropagationOfTheirJointUncertainty) {
+  std::mt19937_64 rng(31);
+  const CameraModel cam = test::paperCamera();
+  const CameraExtrinsics T = test::forwardCamera();
+  for (const Mechanization mech : {Mechanization::kWorldCentric, Mechanization::kSensorCentric}) {
+    FilterState s = test::randomState(mech, 2, rng);
+    const FilterState s0 = s;
+    const int n = s0.dim();
+    const std::vector<FeatureObservation> obs{{7, {220.0, 330.0}}, {8, {400.0, 120.0}}, {9, {90.0, 250.0}}};
+    const std::vector<double> depths{2.0, 4.5, 1.2};
+    // A joint covariance of [state error, 3 inverse-depth errors]: the state's own block and a
+    // random (positive definite) rest, correlated with it.
+    Eigen::MatrixXd R = 0.05 * Eigen::MatrixXd::Random(3, n + 3);
+    // rho = K x + e: correlated with the state through K, plus its own e.
+    const Eigen::MatrixXd K = 0.1 * Eigen::MatrixXd::Random(3, n);
+    const Eigen::Matrix3d E = 0.01 * Eigen::Matrix3d::Identity() + R.leftCols<3>() * R.leftCols<3>().transpose();
+    const Eigen::MatrixXd C = K * s0.covariance();
+    const Eigen::MatrixXd Q = K * s0.covariance() * K.transpose() + E;
+    const std::vector<int> entered = initializeLandmarksInverseDepthJointly(s, obs, depths, Q, C, cam, T, 1.0);
+    ASSERT_EQ(entered, (std::vector<int>{0, 1, 2}));
+    ASSERT_EQ(s.numLandmarks(), 5);
+    // The exact map from [state error, pixel errors, inverse-depth errors] to the three new l.
+    std::vector<Landmark> anchors;
+    for (int a = 0; a < 3; ++a) anchors.push_back(s.landmark(2 + a));
+    const Eigen::MatrixXd Jn = test::numericJacobian(
+        [&](const Eigen::VectorXd& d) -> Eigen::VectorXd {
+          FilterState t = s0;
+          t.boxplus(d.head(n));
+          Eigen::VectorXd out(9);
+          for (int a = 0; a < 3; ++a) {
+            InitializedLandmark l;
+            backProject(t.x, obs[static_cast<size_t>(a)].uv + d.segment<2>(n + 2 * a),
+                        1.0 / (1.0 / depths[static_cast<size_t>(a)] + d(n + 6 + a)), cam, T, &l);
+            out.segment<3>(3 * a) = anchors[static_cast<size_t>(a)].paramsOf(l.p_s_l);
+          }
+          return out;
+        },
+        n + 9);
+    // Covariance of [state error, pixels (1 px each), inverse depths].
+    Eigen::MatrixXd Zf = Eigen::MatrixXd::Zero(n + 9, n + 9);
+    Zf.topLeftCorner(n, n) = s0.covariance();
+    Zf.block(n, n, 6, 6).setIdentity();
+    Zf.block(n + 6, 0, 3, n) = C;
+    Zf.block(0, n + 6, n, 3) = C.transpose();
+    Zf.block(n + 6, n + 6, 3, 3) = Q;
+    Eigen::MatrixXd Jfull = Eigen::MatrixXd::Zero(n + 9, n + 9);
+    Jfull.topLeftCorner(n, n).setIdentity();
+    Jfull.bottomRows(9) = Jn;
+    const Eigen::MatrixXd expected = Jfull * Zf * Jfull.transpose();
+    const Eigen::MatrixXd& P = s.covariance();
+    ASSERT_EQ(P.rows(), n + 9);
+    EXPECT_LT(test::maxAbs(P - expected), 1e-8) << static_cast<int>(mech);
+    // Independent depths and no cross-covariance: the same as one landmark at a time.
+    FilterState a = s0, b = s0;
+    initializeLandmarksInverseDepthJointly(a, obs, depths,
+                                           Eigen::Matrix3d(Eigen::Vector3d(0.04, 0.09, 0.01).asDiagonal()),
+                                           Eigen::MatrixXd::Zero(3, n), cam, T, 1.0);
+    for (int k = 0; k < 3; ++k) {
+      InverseDepthParams p;
+      p.initial_depth_m = depths[static_cast<size_t>(k)];
+      p.inverse_depth_sigma = std::sqrt(Eigen::Vector3d(0.04, 0.09, 0.01)(k));
+      ASSERT_TRUE(initializeLandmarkInverseDepth(b, obs[static_cast<size_t>(k)], cam, T, p));
+    }
+    EXPECT_LT(test::maxAbs(a.covariance() - b.covariance()), 1e-12);
+    for (int k = 2; k < 5; ++k) EXPECT_LT((a.landmark(k).l - b.landmark(k).l).norm(), 1e-12);
+  }
+}

@@ -161,13 +161,21 @@ TEST(RealHandheld, First15SecondsTrackWithTheRigFile) {
 }
 
 // Started mid-walk (the node, a bag played with --start, a reset while walking): no rest to
-// initialize from, so the dynamic initializer must; then it tracks as from the start.
+// initialize from, so the dynamic initializer must; then it tracks as from the start. The run from
+// the start is measured here too, over the same seconds (its poses from the cut run's first one to
+// its end, aligned on their own), so the ratio the issue asks for is what the test prints.
 TEST(RealHandheld, StartedMidWalkInitializesWhileMoving) {
-  // Measured 0.018 / 0.016 m (the run from the start over the same 15 s: 0.016 / 0.007 m); the
-  // bound from 10 s is 1.5x the run from the start's (the issue's target), from 30 s it is not met.
-  for (const auto& [start, bound] : {std::pair{10.0, 0.024}, std::pair{30.0, 0.021}}) {
+  const auto whole = runSegment(0.0, 46.0, "");
+  if (!whole) GTEST_SKIP() << "no dmvio_handheld in DATA_DIR";
+  const auto cam = eval::readAslCamera(std::string(std::getenv("DATA_DIR")) + "/dmvio_handheld/mav0/cam0/sensor.yaml");
+  const auto sfm =
+      eval::readTum(std::string(std::getenv("DATA_DIR")) + "/dmvio_handheld/reference/sfm_camera_poses.txt");
+  const auto whole_view = eval::referenceView(whole->sink.poses, cam.T_b_c, &whole->sink.time_offsets);
+  // Bounds: from 10 s, 1.5x the run from the start (the issue's target); from 30 s it is not met
+  // (docs/initialization.md), the bound is 30% above what was measured.
+  for (const auto& [start, max_ratio] : {std::pair{10.0, 1.5}, std::pair{30.0, 2.6}}) {
     const auto r = runSegment(start, 15.0, "");
-    if (!r) GTEST_SKIP() << "no dmvio_handheld in DATA_DIR";
+    ASSERT_TRUE(r);
     ASSERT_FALSE(r->sink.poses.empty());
     ASSERT_FALSE(r->sink.events.empty());
     EXPECT_EQ(r->sink.events.front().rfind("initialized: dynamic", 0), 0u) << r->sink.events.front();
@@ -176,7 +184,16 @@ TEST(RealHandheld, StartedMidWalkInitializesWhileMoving) {
                 r->sink.events.front().c_str());
     EXPECT_LT(first_odom_after_s, 2.0);
     expectTracked(*r, start < 20.0 ? "from 10 s" : "from 30 s");
-    EXPECT_LT(r->sfm.position_rmse_m, bound);
+    std::vector<eval::StampedPose> same_seconds;
+    for (const auto& p : whole_view)
+      if (p.t >= r->sfm.t.front() && p.t <= r->sfm.t.back()) same_seconds.push_back(p);
+    const auto from_start = eval::compareWithReference(same_seconds, sfm, eval::Alignment::kSim3);
+    const double ratio = r->sfm.position_rmse_m / from_start.position_rmse_m;
+    std::printf(
+        "started %.0f s in: RMSE %.3f m against %.3f m for the run from the start over the same %d poses: "
+        "%.2fx\n",
+        start, r->sfm.position_rmse_m, from_start.position_rmse_m, from_start.matched, ratio);
+    EXPECT_LT(ratio, max_ratio);
   }
 }
 

@@ -159,6 +159,54 @@ TEST(DynamicInit, NoisyWindowsAreUnbiasedAndAsUncertainAsItSays) {
   EXPECT_GT(nees / n, 0.3);
 }
 
+TEST(DynamicInit, TheDepthsShareTheVelocitysScaleErrorAsTheJointCovarianceSays) {
+  // The same windows: the errors of the velocity and of every aligned feature's inverse depth
+  // against their joint covariance. One error of the window's scale moves them all; taken as
+  // independent (the marginals alone), the depths' common error would be several times what the
+  // covariance allows, and tens of landmarks would "know" the scale the window does not.
+  const sim::Scenario sc = sim::hallwayScenario(sim::HallwayParams(), 1.0, 5);
+  std::mt19937_64 rng(11);
+  double nees = 0.0, common = 0.0, common_marginal = 0.0;
+  int dims = 0, n = 0;
+  for (int i = 0; i < 24; ++i) {
+    const double t0 = 1.0 + 1.3 * i;
+    const Window w = runWindow(*sc.trajectory, sc.world, sc.camera, sc.T_b_c, t0, t0 + 1.0, 0.0, 1.0, &rng);
+    if (!w.result) continue;
+    const DynamicInitResult& r = *w.result;
+    const auto m = static_cast<Eigen::Index>(r.landmarks.size());
+    ASSERT_EQ(r.landmark_covariance.rows(), m);
+    ASSERT_EQ(r.landmark_state_covariance.rows(), m);
+    // The true velocity in the estimate's {n} (the yaw is not the alignment's to know).
+    const Mat3 D = (r.state.q_n_b * w.truth.q_n_b.conjugate()).toRotationMatrix();
+    const Vec3 v_true = Eigen::AngleAxisd(std::atan2(D(1, 0), D(0, 0)), Vec3::UnitZ()) * w.truth.v_n_b;
+    Eigen::VectorXd e(3 + m);
+    e.head<3>() = v_true - r.state.v_n_b;
+    for (Eigen::Index j = 0; j < m; ++j) {
+      const DynamicInitLandmark& l = r.landmarks[static_cast<size_t>(j)];
+      e(3 + j) = 1.0 / w.true_depth.at(l.id) - 1.0 / l.depth_m;
+    }
+    Eigen::MatrixXd P(3 + m, 3 + m);
+    P << r.covariance.topLeftCorner<3, 3>(), r.landmark_state_covariance.leftCols<3>().transpose(),
+        r.landmark_state_covariance.leftCols<3>(), r.landmark_covariance;
+    nees += e.dot(P.ldlt().solve(e));
+    dims += static_cast<int>(3 + m);
+    // The depths' common error: their mean, against its variance with and without the correlations.
+    const double mean = e.tail(m).mean();
+    common += mean * mean / (r.landmark_covariance.sum() / static_cast<double>(m * m));
+    common_marginal += mean * mean / (r.landmark_covariance.diagonal().sum() / static_cast<double>(m * m));
+    ++n;
+  }
+  ASSERT_GE(n, 12);
+  std::printf(
+      "joint NEES of velocity and inverse depths %.2f per dimension (%d windows, %d dimensions); the depths' "
+      "mean error: (e / sigma)^2 %.2f with the correlations, %.2f with the marginals alone\n",
+      nees / dims, n, dims, common / n, common_marginal / n);
+  // chi^2(dims) / dims is about 1 (+-0.1 for this many dimensions); the alignment's covariance is
+  // a linearization, so within 1.5. The mean error: chi^2(n) / n < 1.8 (95%) for 12 or more windows.
+  EXPECT_LT(nees / dims, 1.5);
+  EXPECT_LT(common / n, 1.8);
+}
+
 TEST(DynamicInit, FindsAnUnknownCameraImuTimeOffset) {
   // The frames' stamps are 40 ms early on the IMU clock (a camera-IMU time offset nobody
   // configured): the alignment is best at the true offset, which it reports.

@@ -58,7 +58,7 @@ struct DynamicInitLandmark {
   std::int64_t id = 0;
   Eigen::Vector2d uv = Eigen::Vector2d::Zero();  ///< its pixel in the last frame
   double depth_m = 0.0;                          ///< its depth in the last camera frame [m]
-  double inverse_depth_sigma = 0.0;              ///< std-dev of 1 / depth [1/m]
+  double inverse_depth_sigma = 0.0;              ///< std-dev of 1 / depth (its marginal) [1/m]
 };
 
 struct DynamicInitResult {
@@ -90,6 +90,12 @@ struct DynamicInitResult {
   double median_depth_m = 0.0;
   double residual_rms_px = 0.0;  ///< of the alignment
   std::vector<DynamicInitLandmark> landmarks;
+  /// The landmarks' inverse depths are not known independently: one error of the window's
+  /// velocity, gravity and bias (its scale) moves every depth and the velocity together. Their
+  /// joint covariance [1/m^2] (order of `landmarks`; the diagonal is their inverse_depth_sigma^2)
+  /// and their cross-covariance with [v_n_b, psi, b_a] of `covariance` (one row per landmark).
+  Eigen::MatrixXd landmark_covariance;
+  Eigen::Matrix<double, Eigen::Dynamic, 9> landmark_state_covariance;
 };
 
 class DynamicInitializer {

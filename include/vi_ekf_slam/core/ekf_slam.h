@@ -52,11 +52,9 @@ class EkfSlam {
                   std::optional<double> time_offset_s = std::nullopt);
   /// Starts from a dynamic initialization: its state (or `registered`, the same moved to a known
   /// position and yaw), its uncertainty over config().initial, its time offset, and the features
-  /// it aligned as landmarks at their depth. Returns the number of landmarks added.
+  /// it aligned as landmarks at their depth, with their joint uncertainty (one scale error for
+  /// all and the velocity). Returns the number of landmarks added.
   int initialize(const DynamicInitResult& aligned, const NavState& registered);
-  /// Adds a landmark seen at pixel uv now, at the given depth [m] with std-dev of its inverse
-  /// depth [1/m] (an initializer's). False if not initialized, known, the map is full, or bad.
-  bool addLandmark(std::int64_t id, const Eigen::Vector2d& uv, double depth_m, double inverse_depth_sigma);
   bool initialized() const { return initialized_; }
   /// Forgets state, map and IMU buffer.
   void reset();
@@ -116,6 +114,11 @@ class EkfSlam {
   /// or taken by a short map) at the prior depth (unless `defer`). Fills new_ids, removed_ids and
   /// the counts of r.
   void addLandmarksDelayed(const std::vector<FeatureObservation>& fresh, double t, bool defer, FrameResult* r);
+  /// The world-centric starting state (its covariance the registration's and u's).
+  FilterState startingState(const NavState& init, const InitialUncertainty& u,
+                            std::optional<double> time_offset_s) const;
+  /// Starts from s (world-centric, switched to the configured mechanization).
+  void start(FilterState s, double scene_depth_m);
   /// New tracks wait for a baseline (config().triangulation, for inverse depth composed after every update).
   bool triangulationActive() const;
 

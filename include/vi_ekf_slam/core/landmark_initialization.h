@@ -10,6 +10,8 @@
 //   the fixed-depth filter inconsistent.
 #pragma once
 
+#include <vector>
+
 #include "vi_ekf_slam/core/measurement_model.h"
 #include "vi_ekf_slam/core/types.h"
 
@@ -52,5 +54,16 @@ struct InverseDepthParams {
 /// be undistorted.
 bool initializeLandmarkInverseDepth(FilterState& state, const FeatureObservation& obs, const CameraModel& camera,
                                     const CameraExtrinsics& T_b_c, const InverseDepthParams& params);
+
+/// Anchored inverse-depth landmarks whose inverse depths an initializer estimated together with
+/// the state: obs[i] at depth_m[i] (camera z), the errors of their inverse depths with covariance
+/// Q (one row per observation) [1/m^2] and cross-covariance C (one row per observation, dim()
+/// columns) with the current state. Each also carries its ray's pose and pixel errors, as
+/// initializeLandmarkInverseDepth's (the same result for a diagonal Q and C = 0). Returns the
+/// indices of the observations that entered (in order); the others' pixel cannot be undistorted.
+std::vector<int> initializeLandmarksInverseDepthJointly(FilterState& state, const std::vector<FeatureObservation>& obs,
+                                                        const std::vector<double>& depth_m, const Eigen::MatrixXd& Q,
+                                                        const Eigen::MatrixXd& C, const CameraModel& camera,
+                                                        const CameraExtrinsics& T_b_c, double pixel_noise_px);
 
 }  // namespace vi_ekf_slam
