@@ -208,6 +208,16 @@ int EkfSlam::initialize(const DynamicInitResult& aligned, const NavState& regist
   T.block<3, 3>(3, 3) = R_z;
   u.velocity_attitude_accel_bias = T * aligned.covariance * T.transpose();
   FilterState s = startingState(registered, u, config_.camera_time_offset_s + aligned.time_offset_correction_s);
+  {
+    // The gyro bias the alignment only considered moved its velocity, tilt and bias.
+    const Eigen::Matrix<double, 9, 3> X = T * aligned.gyro_bias_covariance;
+    Eigen::MatrixXd& P = s.mutableCovariance();
+    const std::array<int, 3> at{kV, kPsi, kBa};
+    for (int i = 0; i < 3; ++i) {
+      P.block<3, 3>(at[static_cast<size_t>(i)], kBg) = X.middleRows<3>(3 * i);
+      P.block<3, 3>(kBg, at[static_cast<size_t>(i)]) = X.middleRows<3>(3 * i).transpose();
+    }
+  }
   // The aligned features enter with the depth the alignment found (their first updates are then
   // nearly linear) when it knows it better than a new track's prior; the others later as any new
   // track. They enter together: one error of the window's scale moves all their depths and the
@@ -218,7 +228,7 @@ int EkfSlam::initialize(const DynamicInitResult& aligned, const NavState& regist
   std::vector<int> candidates;  // indices into aligned.landmarks
   const auto n = static_cast<Eigen::Index>(aligned.landmarks.size());
   const bool joint = aligned.landmark_covariance.rows() == n && aligned.landmark_covariance.cols() == n &&
-                     aligned.landmark_state_covariance.rows() == n;
+                     aligned.landmark_state_covariance.rows() == n && aligned.landmark_gyro_bias_covariance.rows() == n;
   for (int j = 0; j < static_cast<int>(n); ++j) {
     const DynamicInitLandmark& l = aligned.landmarks[static_cast<size_t>(j)];
     if (static_cast<int>(obs.size()) >= config_.max_landmarks) break;
@@ -243,6 +253,7 @@ int EkfSlam::initialize(const DynamicInitResult& aligned, const NavState& regist
     C.block<1, 3>(a, kV) = c.segment<3>(0);
     C.block<1, 3>(a, kPsi) = c.segment<3>(3);
     C.block<1, 3>(a, kBa) = c.segment<3>(6);
+    C.block<1, 3>(a, kBg) = aligned.landmark_gyro_bias_covariance.row(ja);
   }
   const int added = static_cast<int>(
       initializeLandmarksInverseDepthJointly(s, obs, depths, Q, C, camera_, T_b_c_, config_.update.pixel_noise_px)

@@ -96,6 +96,11 @@ struct DynamicInitResult {
   /// and their cross-covariance with [v_n_b, psi, b_a] of `covariance` (one row per landmark).
   Eigen::MatrixXd landmark_covariance;
   Eigen::Matrix<double, Eigen::Dynamic, 9> landmark_state_covariance;
+  /// The gyro bias is not estimated, only considered (its prior gyro_bias_sigma_radps): the
+  /// cross-covariance of [v_n_b, psi, b_a] (rows) and of the landmarks' inverse depths (one row
+  /// per landmark) with it [., rad/s].
+  Eigen::Matrix<double, 9, 3> gyro_bias_covariance = Eigen::Matrix<double, 9, 3>::Zero();
+  Eigen::Matrix<double, Eigen::Dynamic, 3> landmark_gyro_bias_covariance;
 };
 
 class DynamicInitializer {
