@@ -30,12 +30,20 @@ DelayedLandmarks::Selection DelayedLandmarks::select(const FilterState& state,
                                                      const std::vector<FeatureObservation>& fresh,
                                                      const CameraModel& camera, const CameraExtrinsics& T_b_c,
                                                      const TriangulationParams& params, double pixel_var,
-                                                     double gate_probability, bool wait, int fill) {
+                                                     double gate_probability, bool wait, int fill,
+                                                     double prior_inverse_depth_sigma) {
   Selection out;
   out.wait = wait;
   std::unordered_map<std::int64_t, Waiting> still;  // the waiting tracks seen in this image
   const double gate = chiSquaredQuantile(gate_probability, 1.0);
-  std::vector<std::pair<double, FeatureObservation>> waited;  // (how long, track) of those still waiting
+  struct Waited {
+    double how_long_s;
+    FeatureObservation obs;
+    std::int64_t clone_id;
+    bool triangulated;  ///< the two views give a point that passes the rays' gap test
+    TriangulatedLandmark landmark;
+  };
+  std::vector<Waited> waited;  // those still waiting
   for (const auto& f : fresh) {
     const auto w = waiting_.find(f.id);
     const CameraClone* clone = w == waiting_.end() ? nullptr : findClone(w->second.clone_id);
@@ -55,16 +63,22 @@ DelayedLandmarks::Selection DelayedLandmarks::select(const FilterState& state,
       continue;  // a far point, or a rig that hardly moves: forgotten, it starts again on a new clone
     } else {
       still.emplace(f.id, w->second);
-      waited.emplace_back(state.timestamp - clone->t, f);
+      waited.push_back({state.timestamp - clone->t, f, clone->id, ok && l.ray_gap_nis <= gate, l});
     }
   }
   // A map short of landmarks takes the tracks that waited longest, and at least
-  // starved_max_wait_s, at the prior depth now.
-  std::sort(waited.begin(), waited.end(), [](const auto& a, const auto& b) { return a.first > b.first; });
+  // starved_max_wait_s, now: with the inverse depth their two views give where that is known
+  // better than the prior's (a slow start's baseline after 0.3 s), else at the prior depth.
+  std::sort(waited.begin(), waited.end(), [](const auto& a, const auto& b) { return a.how_long_s > b.how_long_s; });
   const int take = std::min<int>(static_cast<int>(waited.size()), fill - static_cast<int>(out.triangulated.size()));
-  for (int i = 0; i < take && waited[static_cast<size_t>(i)].first >= params.starved_max_wait_s; ++i) {
-    out.expired.push_back(waited[static_cast<size_t>(i)].second);
-    still.erase(out.expired.back().id);
+  for (int i = 0; i < take && waited[static_cast<size_t>(i)].how_long_s >= params.starved_max_wait_s; ++i) {
+    const Waited& w = waited[static_cast<size_t>(i)];
+    if (w.triangulated && w.landmark.P_ll(2, 2) < prior_inverse_depth_sigma * prior_inverse_depth_sigma) {
+      out.triangulated.push_back({w.obs, w.clone_id, w.landmark});
+    } else {
+      out.expired.push_back(w.obs);
+    }
+    still.erase(w.obs.id);
   }
   waiting_ = std::move(still);  // without the lost, the selected and the forgotten
   return out;

@@ -158,8 +158,9 @@ std::vector<ParamSpec> makeTable() {
       field("triangulation_min_depth_m", "map", VI_FIELD(p.filter.triangulation.min_depth_m), "m",
             "a track triangulated nearer than this to either camera is a mismatch", dyn, 0.01, 5.0),
       field("triangulation_min_map_landmarks", "map", VI_FIELD(p.filter.triangulation.min_map_landmarks), "count",
-            "a map with fewer landmarks (a start, a reset, a new scene) takes the longest waiting tracks at the prior "
-            "depth once they waited triangulation_starved_max_wait_s",
+            "a map with fewer landmarks (a start, a reset, a new scene) takes the longest waiting tracks once they "
+            "waited triangulation_starved_max_wait_s: with their two-view depth where it beats the prior, else at "
+            "the prior depth",
             dyn, 0, 1000),
       field("triangulation_starved_max_wait_s", "map", VI_FIELD(p.filter.triangulation.starved_max_wait_s), "s",
             "how long a track waits for its baseline while the map is short of landmarks", dyn, 0.0, 10.0),

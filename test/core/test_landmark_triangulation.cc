@@ -253,3 +253,48 @@ TEST(DelayedLandmarks, NewTracksDoNotWaitWhenTheRigIsNotSeenMoving) {
   EXPECT_EQ(d.clones(), 0);
   EXPECT_EQ(s.numLandmarks(), 0);
 }
+
+// A map short of landmarks takes tracks that have waited starved_max_wait_s with the inverse depth
+// their two views give where it beats the prior (two-view inverse depth is as well known for a far
+// point as for a near one: sigma(rho) ~ pixel noise / (f baseline)), and at the prior depth where
+// the baseline is too short for that.
+TEST(DelayedLandmarks, AShortMapTakesTheTwoViewDepthWhenItBeatsThePrior) {
+  const CameraModel cam = test::paperCamera();
+  const CameraExtrinsics T = test::forwardCamera();
+  const Vec3 mid_point(0.3, 0.5, 20.0), far_point(-0.4, 0.2, 400.0);  // in the first camera
+  for (const double baseline_m : {0.1, 0.002}) {
+    FilterState s(Mechanization::kSensorCentricComposition);
+    s.setCovariance(1e-8 * Eigen::MatrixXd::Identity(s.dim(), s.dim()));
+    TriangulationParams p;
+    DelayedLandmarks d;
+    auto frame = [&]() {
+      std::vector<FeatureObservation> f;
+      for (const auto& [id, p_c] : {std::pair{1, mid_point}, std::pair{2, far_point}}) {
+        Eigen::Vector2d uv;
+        EXPECT_TRUE(cam.project(landmarkInCamera(s.x, T.R_b_c * p_c + T.p_b_c, T), &uv));
+        f.push_back({id, uv});
+      }
+      return f;
+    };
+    s.timestamp = 0.0;
+    auto sel = d.select(s, frame(), cam, T, p, 1.0, 0.99, true);
+    d.commit(s, sel, frame(), 10, T, p);
+    // The rig moved sideways by the baseline in 0.4 s: neither point is known to 30%.
+    s.timestamp = 0.4;
+    s.x.p_s_b = T.R_b_c * Vec3(baseline_m, 0.0, 0.0);
+    sel = d.select(s, frame(), cam, T, p, 1.0, 0.99, true, /*fill=*/2, /*prior_inverse_depth_sigma=*/0.5);
+    if (baseline_m > 0.01) {
+      ASSERT_EQ(sel.triangulated.size(), 2u);
+      EXPECT_TRUE(sel.expired.empty());
+      for (const auto& r : sel.triangulated) {
+        const double rho_true = 1.0 / (r.obs.id == 1 ? mid_point.z() : far_point.z());
+        EXPECT_NEAR(r.landmark.landmark.l.z(), rho_true, 1e-6) << r.obs.id;  // noise-free views
+        EXPECT_GT(r.landmark.relative_depth_sigma, p.max_relative_depth_sigma) << r.obs.id;
+        EXPECT_LT(std::sqrt(r.landmark.P_ll(2, 2)), 0.5) << r.obs.id;
+      }
+    } else {
+      EXPECT_TRUE(sel.triangulated.empty());
+      EXPECT_EQ(sel.expired.size(), 2u);  // at the prior depth
+    }
+  }
+}

@@ -6,10 +6,11 @@
 // its depth is known to max_relative_depth_sigma and its two rays meet (chi^2 gate). A track that
 // has not got there after max_wait_s (a far point, a rotation in place) is forgotten and starts
 // again on a newer clone. Waiting costs the filter those tracks' information: a map with fewer
-// than min_map_landmarks (a start, a reset, a new scene) takes the longest waiting at the prior
-// depth once they have waited starved_max_wait_s. While the rig is not seen moving new tracks do
-// not wait: they are handed back (to the prior depth and the zero-velocity rules, as without the
-// delay). Clones no track waits on leave the state.
+// than min_map_landmarks (a start, a reset, a new scene) takes the longest waiting once they have
+// waited starved_max_wait_s, with their two-view depth if it beats the prior, else at the prior
+// depth. While the rig is not seen moving new tracks do not wait: they are handed back (to the
+// prior depth and the zero-velocity rules, as without the delay). Clones no track waits on leave
+// the state.
 #pragma once
 
 #include <cstdint>
@@ -56,10 +57,11 @@ class DelayedLandmarks {
   /// [px^2], gate_probability: the rays' gap test. wait = false: new tracks do not start waiting
   /// (they are expired at once); those already waiting go on. fill: a map short of this many
   /// landmarks: up to that many (less those triangulated) of those waiting longest, at least
-  /// starved_max_wait_s, are expired now.
+  /// starved_max_wait_s, enter now: triangulated if their two views know the inverse depth better
+  /// than prior_inverse_depth_sigma [1/m] (the prior of a new track), else expired (for the prior).
   Selection select(const FilterState& state, const std::vector<FeatureObservation>& fresh, const CameraModel& camera,
                    const CameraExtrinsics& T_b_c, const TriangulationParams& params, double pixel_var,
-                   double gate_probability, bool wait, int fill = 0);
+                   double gate_probability, bool wait, int fill = 0, double prior_inverse_depth_sigma = 0.0);
   /// Step 2: appends up to `capacity` of the selected landmarks (returns their ids), stops waiting
   /// for the expired ones, attaches the fresh tracks not yet waiting to a clone taken now (if the
   /// selection waits, the last clone is older than clone_interval_s and there is room), and
