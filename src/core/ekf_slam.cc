@@ -210,7 +210,9 @@ int EkfSlam::initialize(const DynamicInitResult& aligned, const NavState& regist
   FilterState s = startingState(registered, u, config_.camera_time_offset_s + aligned.time_offset_correction_s);
   {
     // The gyro bias the alignment only considered moved its velocity, tilt and bias.
-    const Eigen::Matrix<double, 9, 3> X = T * aligned.gyro_bias_covariance;
+    const Eigen::Matrix<double, 9, 3> X = aligned.gyro_bias_covariance.allFinite()
+                                              ? Eigen::Matrix<double, 9, 3>(T * aligned.gyro_bias_covariance)
+                                              : Eigen::Matrix<double, 9, 3>::Zero();
     Eigen::MatrixXd& P = s.mutableCovariance();
     const std::array<int, 3> at{kV, kPsi, kBa};
     for (int i = 0; i < 3; ++i) {
@@ -227,8 +229,11 @@ int EkfSlam::initialize(const DynamicInitResult& aligned, const NavState& regist
   std::vector<double> depths;
   std::vector<int> candidates;  // indices into aligned.landmarks
   const auto n = static_cast<Eigen::Index>(aligned.landmarks.size());
+  // (Without a usable joint covariance, the marginals alone, as independent depths.)
   const bool joint = aligned.landmark_covariance.rows() == n && aligned.landmark_covariance.cols() == n &&
-                     aligned.landmark_state_covariance.rows() == n && aligned.landmark_gyro_bias_covariance.rows() == n;
+                     aligned.landmark_state_covariance.rows() == n &&
+                     aligned.landmark_gyro_bias_covariance.rows() == n && aligned.landmark_covariance.allFinite() &&
+                     aligned.landmark_state_covariance.allFinite() && aligned.landmark_gyro_bias_covariance.allFinite();
   for (int j = 0; j < static_cast<int>(n); ++j) {
     const DynamicInitLandmark& l = aligned.landmarks[static_cast<size_t>(j)];
     if (static_cast<int>(obs.size()) >= config_.max_landmarks) break;

@@ -1,5 +1,7 @@
 #include <gtest/gtest.h>
 
+#include <limits>
+
 #include "test_helpers.h"
 #include "vi_ekf_slam/core/ekf_slam.h"
 #include "vi_ekf_slam/sim/scenarios.h"
@@ -361,4 +363,31 @@ TEST(EkfSlam, ANonFiniteCovarianceIsReportedLostNotThrown) {
   ASSERT_NO_THROW(r = f.processFrame(frame));
   EXPECT_TRUE(r.processed);
   EXPECT_FALSE(r.lost.empty());
+}
+
+// A dynamic initialization's aligned landmarks enter with their joint uncertainty; a joint
+// covariance that is not finite (a degenerate alignment) is not taken: the landmarks enter with
+// their marginals, and nothing non-finite reaches the filter.
+TEST(EkfSlam, ADynamicStartTakesTheJointDepthsOnlyWhenFinite) {
+  DynamicInitResult aligned;
+  aligned.state.timestamp = 1.0;
+  aligned.state.v_n_b = Vec3(1.0, 0.0, 0.0);
+  aligned.covariance = Eigen::Matrix<double, 9, 9>::Identity() * 1e-4;
+  aligned.covariance(5, 5) = 0.0;  // no yaw
+  aligned.landmarks = {{1, Eigen::Vector2d(200.0, 200.0), 3.0, 0.05}, {2, Eigen::Vector2d(400.0, 300.0), 4.0, 0.05}};
+  aligned.landmark_covariance = Eigen::Matrix2d::Identity() * 0.0025;
+  aligned.landmark_covariance(0, 1) = aligned.landmark_covariance(1, 0) = 0.002;  // one scale error
+  aligned.landmark_state_covariance = Eigen::Matrix<double, 2, 9>::Zero();
+  aligned.landmark_gyro_bias_covariance = Eigen::Matrix<double, 2, 3>::Zero();
+  for (const bool finite : {true, false}) {
+    if (!finite) aligned.landmark_covariance(0, 1) = std::numeric_limits<double>::quiet_NaN();
+    EkfSlam f(EkfSlamConfig(), sim::paperCamera(), sim::torsoCameraExtrinsics());
+    ASSERT_EQ(f.initialize(aligned, aligned.state), 2);
+    const Eigen::MatrixXd& P = f.state().covariance();
+    ASSERT_TRUE(P.allFinite());
+    const int a = f.state().landmarkIndex(0) + 2, b = f.state().landmarkIndex(1) + 2;  // the inverse depths
+    // Sensor-centric: the anchors are the exact start pose, so the joint is the alignment's.
+    EXPECT_NEAR(P(a, b), finite ? 0.002 : 0.0, 1e-9) << finite;
+    EXPECT_NEAR(P(a, a), 0.0025, 1e-9) << finite;
+  }
 }
