@@ -87,6 +87,36 @@ Window runWindow(const sim::Trajectory& traj, const sim::LandmarkWorld& world, c
   return w;
 }
 
+/// A window's errors (truth - estimate) of the first k entries of [v_n (3), roll, pitch] and of
+/// every aligned inverse depth, in the estimate's {n} (the yaw is not the alignment's to know),
+/// with their joint covariance as the alignment reports it.
+struct JointError {
+  Eigen::VectorXd e;
+  Eigen::MatrixXd P;
+};
+JointError jointError(const Window& w, int k) {
+  const DynamicInitResult& r = *w.result;
+  const auto m = static_cast<Eigen::Index>(r.landmarks.size());
+  const Mat3 D = (r.state.q_n_b * w.truth.q_n_b.conjugate()).toRotationMatrix();
+  const Quat unyaw(Eigen::AngleAxisd(std::atan2(D(1, 0), D(0, 0)), Vec3::UnitZ()));
+  Eigen::Matrix<double, 5, 1> x;
+  x.head<3>() = unyaw * w.truth.v_n_b - r.state.v_n_b;
+  x.tail<2>() = logSO3(((unyaw * w.truth.q_n_b) * r.state.q_n_b.conjugate()).toRotationMatrix()).head<2>();
+  JointError j;
+  j.e.resize(k + m);
+  j.e.head(k) = x.head(k);
+  for (Eigen::Index i = 0; i < m; ++i) {
+    const DynamicInitLandmark& l = r.landmarks[static_cast<size_t>(i)];
+    j.e(k + i) = 1.0 / w.true_depth.at(l.id) - 1.0 / l.depth_m;
+  }
+  j.P.resize(k + m, k + m);
+  j.P.topLeftCorner(k, k) = r.covariance.topLeftCorner(k, k);
+  j.P.bottomLeftCorner(m, k) = r.landmark_state_covariance.leftCols(k);
+  j.P.topRightCorner(k, m) = r.landmark_state_covariance.leftCols(k).transpose();
+  j.P.bottomRightCorner(m, m) = r.landmark_covariance;
+  return j;
+}
+
 }  // namespace
 
 TEST(DynamicInit, NoiseFreeWindowGivesExactGravityVelocityAndDepths) {
@@ -177,22 +207,11 @@ TEST(DynamicInit, TheDepthsShareTheVelocitysScaleErrorAsTheJointCovarianceSays) 
     const auto m = static_cast<Eigen::Index>(r.landmarks.size());
     ASSERT_EQ(r.landmark_covariance.rows(), m);
     ASSERT_EQ(r.landmark_state_covariance.rows(), m);
-    // The true velocity in the estimate's {n} (the yaw is not the alignment's to know).
-    const Mat3 D = (r.state.q_n_b * w.truth.q_n_b.conjugate()).toRotationMatrix();
-    const Vec3 v_true = Eigen::AngleAxisd(std::atan2(D(1, 0), D(0, 0)), Vec3::UnitZ()) * w.truth.v_n_b;
-    Eigen::VectorXd e(3 + m);
-    e.head<3>() = v_true - r.state.v_n_b;
-    for (Eigen::Index j = 0; j < m; ++j) {
-      const DynamicInitLandmark& l = r.landmarks[static_cast<size_t>(j)];
-      e(3 + j) = 1.0 / w.true_depth.at(l.id) - 1.0 / l.depth_m;
-    }
-    Eigen::MatrixXd P(3 + m, 3 + m);
-    P << r.covariance.topLeftCorner<3, 3>(), r.landmark_state_covariance.leftCols<3>().transpose(),
-        r.landmark_state_covariance.leftCols<3>(), r.landmark_covariance;
-    nees += e.dot(P.ldlt().solve(e));
-    dims += static_cast<int>(3 + m);
+    const JointError j = jointError(w, 3);
+    nees += j.e.dot(j.P.ldlt().solve(j.e));
+    dims += static_cast<int>(j.e.size());
     // The depths' common error: their mean, against its variance with and without the correlations.
-    const double mean = e.tail(m).mean();
+    const double mean = j.e.tail(m).mean();
     common += mean * mean / (r.landmark_covariance.sum() / static_cast<double>(m * m));
     common_marginal += mean * mean / (r.landmark_covariance.diagonal().sum() / static_cast<double>(m * m));
     ++n;
@@ -224,26 +243,9 @@ TEST(DynamicInit, AGyroBiasItDoesNotEstimateIsInItsJointCovariance) {
     const Window w =
         runWindow(*sc.trajectory, sc.world, sc.camera, sc.T_b_c, t0, t0 + 1.0, 0.0, 1.0, &rng, 0.05, b_g, 0.01);
     if (!w.result) continue;
-    const DynamicInitResult& r = *w.result;
-    const auto m = static_cast<Eigen::Index>(r.landmarks.size());
-    // Errors of [v_n, roll/pitch, inverse depths] in the estimate's {n} (its yaw is its own).
-    const Mat3 D = (r.state.q_n_b * w.truth.q_n_b.conjugate()).toRotationMatrix();
-    const Quat unyaw(Eigen::AngleAxisd(std::atan2(D(1, 0), D(0, 0)), Vec3::UnitZ()));
-    Eigen::VectorXd e(5 + m);
-    e.head<3>() = unyaw * w.truth.v_n_b - r.state.v_n_b;
-    e.segment<2>(3) = logSO3(((unyaw * w.truth.q_n_b) * r.state.q_n_b.conjugate()).toRotationMatrix()).head<2>();
-    for (Eigen::Index j = 0; j < m; ++j) {
-      const DynamicInitLandmark& l = r.landmarks[static_cast<size_t>(j)];
-      e(5 + j) = 1.0 / w.true_depth.at(l.id) - 1.0 / l.depth_m;
-    }
-    Eigen::MatrixXd P(5 + m, 5 + m);
-    P.topLeftCorner<5, 5>() = r.covariance.topLeftCorner<5, 5>();
-    P.bottomLeftCorner(m, 5) = r.landmark_state_covariance.leftCols<5>();
-    P.topRightCorner(5, m) = r.landmark_state_covariance.leftCols<5>().transpose();
-    P.bottomRightCorner(m, m) = r.landmark_covariance;
-    const double w_nees = e.dot(P.ldlt().solve(e));
-    nees += w_nees;
-    dims += static_cast<int>(5 + m);
+    const JointError j = jointError(w, 5);  // velocity, roll/pitch and inverse depths
+    nees += j.e.dot(j.P.ldlt().solve(j.e));
+    dims += static_cast<int>(j.e.size());
     ++n;
   }
   ASSERT_GE(n, 12);
