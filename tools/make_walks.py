@@ -7,12 +7,13 @@ speed) and a small postural sway when standing:
 
   slow_start  starts at a slow walk (0.5 m/s) and reaches 1.3 m/s only after 20 s;
   stops       1.3 m/s with stands of 5, 12 and 20 s (about a third of the time standing);
-  stairs      walks, climbs a flight of stairs (2.8 m up over 5 m), walks on, comes back down.
+  stairs      walks, climbs a flight of stairs (2.8 m up over 5 m), walks on, comes back down;
+  fast        a brisk walk at 2.4 m/s from the start (a hurried responder; the gait at its largest).
 
 The files are made by a formula, not recorded: they exercise the starts, stands and climbs that
 held-out recordings have (issue 17), and the suite runs them next to the recorded trajectories.
 
-  make_walks.py OUT_DIR          writes OUT_DIR/{slow_start,stops,stairs}.txt (100 Hz, z up)
+  make_walks.py OUT_DIR          writes OUT_DIR/{slow_start,stops,stairs,fast}.txt (100 Hz, z up)
 """
 import argparse
 import math
@@ -146,13 +147,16 @@ def make(kind):
             s += v / RATE_HZ
         profile = np.convolve(profile, np.ones(100) / 100, mode="same")
         return walk(lambda t: float(np.interp(t, ts, profile)), 90.0, height_of_s=height, seed=3)
+    if kind == "fast":
+        # 2.4 m/s from the first sample: cadence 2.6 steps/s, the bounce and sway at their cap.
+        return walk(lambda t: 2.4, 60.0, seed=4)
     raise ValueError(kind)
 
 
 def main():
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("out_dir")
-    ap.add_argument("--kinds", default="slow_start,stops,stairs")
+    ap.add_argument("--kinds", default="slow_start,stops,stairs,fast")
     a = ap.parse_args()
     os.makedirs(a.out_dir, exist_ok=True)
     for kind in a.kinds.split(","):
