@@ -144,7 +144,8 @@ bench: build $(BAG) $(if $(wildcard $(DATA_DIR)/dmvio_handheld/mav0),results/bag
 
 # The suite (docs/suite.md): the study with the same seeds over the built-in walk, every
 # trajectory in DATA_DIR/trajectories (120 s windows) and the walks of tools/make_walks.py; one
-# table per case and configuration plus the worst case of each configuration.
+# table per case and configuration plus the worst case of each configuration; SEED=1,2,3: each seed
+# in SUITE_OUT/seed_N and the worst over all seeds in SUITE_OUT/suite_seeds.md.
 #   make suite [SUITE_RUNS=8] [SEED=1] [SUITE_CONFIGS=a,b] [SUITE_OUT=results/suite] [STUDY_ARGS=...]
 SUITE_RUNS    ?= 8
 SUITE_OUT     ?= results/suite

@@ -4,13 +4,15 @@ table per trajectory and configuration, with a worst-case row per configuration.
 
 Cases: the built-in hallway walk; the TUM corridor, UDel ARL and EuRoC V1_01 (the non-pedestrian
 check) from DATA_DIR/trajectories, each in 120 s windows; and the walks of tools/make_walks.py
-(a slow start, long stands, stairs). Any other *.txt in DATA_DIR/trajectories joins the suite
+(a slow start, stands, stairs, a fast walk). Any other *.txt in DATA_DIR/trajectories joins the suite
 with one window from its start, so the command runs unchanged on trajectories added there.
 
-  suite.py --study BIN [--data DIR] [--out results/suite] [--runs 8] [--seed 1]
+  suite.py --study BIN [--data DIR] [--out results/suite] [--runs 8] [--seed 1 | --seed 1,2,3]
            [--configs NAME,...] [--threads N] [-- extra study options]
 
 Writes OUT/<case>/ (the study's files), OUT/suite.json and OUT/suite.md, and prints the table.
+With several seeds: OUT/seed_N/ as above for each, and OUT/suite_seeds.{md,json}: every case's
+pose NEES and consistent fraction per seed, and the worst case over all cases and seeds.
 """
 import argparse
 import glob
@@ -53,26 +55,14 @@ def fmt(v, digits=3):
     return "-" if v is None or (isinstance(v, float) and not math.isfinite(v)) else ("%.*f" % (digits, v))
 
 
-def main():
-    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    ap.add_argument("--study", required=True, help="the vi_ekf_slam_study binary")
-    ap.add_argument("--data", default=os.environ.get("DATA_DIR", "../shared/data"))
-    ap.add_argument("--out", default="results/suite")
-    ap.add_argument("--runs", type=int, default=8)
-    ap.add_argument("--seed", type=int, default=1)
-    ap.add_argument("--configs", default=",".join(DEFAULT_CONFIGS))
-    ap.add_argument("--threads", type=int, default=os.cpu_count() or 1)
-    ap.add_argument("extra", nargs="*", help="more options for every study call (after --)")
-    a = ap.parse_args()
-
-    walks = os.path.join(a.out, "walks")
-    subprocess.run([sys.executable, os.path.join(HERE, "make_walks.py"), walks], check=True, stdout=subprocess.DEVNULL)
-    configs = a.configs.split(",")
+def run_cases(a, seed, out_dir, walks, configs):
+    """The study on every case with one seed: OUT_DIR/<case>/, suite.json and suite.md; the rows
+    (case x configuration) and each configuration's worst case."""
     results = {}
     t_start = time.time()
     for name, traj, start, window in cases(a.data, walks):
-        out = os.path.join(a.out, name)
-        cmd = [a.study, "--trajectory", traj, "--runs", str(a.runs), "--seed", str(a.seed), "--configs", a.configs,
+        out = os.path.join(out_dir, name)
+        cmd = [a.study, "--trajectory", traj, "--runs", str(a.runs), "--seed", str(seed), "--configs", a.configs,
                "--threads", str(a.threads), "--out", out]
         if start > 0:
             cmd += ["--start-offset", str(start)]
@@ -89,8 +79,7 @@ def main():
         print("  %-34s %5.0f s" % (name, time.time() - t0), flush=True)
 
     # Per case: each configuration's metrics and its ATE over the best of the paper's three.
-    rows, worst = [], {c: {"nees_pose": 0.0, "consistent_fraction": 1.0, "ate_ratio": 0.0, "outside_band": 0}
-                       for c in configs}
+    rows, worst = [], {c: new_worst() for c in configs}
     band = None
     for name, s in results.items():
         band = s["config"]["pose_nees_band"]
@@ -100,23 +89,18 @@ def main():
             m = s[c]
             ratio = m["ate_position_m"] / best_paper if best_paper else None
             inside = m["nees_pose"] is not None and band[0] <= m["nees_pose"] <= band[1]
-            rows.append({"case": name, "config": c, "ate_m": m["ate_position_m"], "ate_posyaw_m": m["ate_posyaw_m"],
-                         "nees_pose": m["nees_pose"], "consistent_fraction": m["consistent_fraction"],
-                         "ate_over_best_paper": ratio, "nees_inside_band": inside})
-            w = worst[c]
-            nees = m["nees_pose"] if m["nees_pose"] is not None else float("inf")
-            w["nees_pose"] = max(w["nees_pose"], nees)
-            w["consistent_fraction"] = min(w["consistent_fraction"], m["consistent_fraction"] or 0.0)
-            if ratio is not None:
-                w["ate_ratio"] = max(w["ate_ratio"], ratio)
-            w["outside_band"] += 0 if inside else 1
-    os.makedirs(a.out, exist_ok=True)
-    with open(os.path.join(a.out, "suite.json"), "w") as f:
-        json.dump({"runs": a.runs, "seed": a.seed, "pose_nees_band": band, "rows": rows, "worst": worst,
+            row = {"case": name, "config": c, "ate_m": m["ate_position_m"], "ate_posyaw_m": m["ate_posyaw_m"],
+                   "nees_pose": m["nees_pose"], "consistent_fraction": m["consistent_fraction"],
+                   "ate_over_best_paper": ratio, "nees_inside_band": inside}
+            rows.append(row)
+            add_to_worst(worst[c], row)
+    os.makedirs(out_dir, exist_ok=True)
+    with open(os.path.join(out_dir, "suite.json"), "w") as f:
+        json.dump({"runs": a.runs, "seed": seed, "pose_nees_band": band, "rows": rows, "worst": worst,
                    "minutes": (time.time() - t_start) / 60}, f, indent=1)
 
     lines = ["# Suite: %d cases, %d runs each, seed %d (pose NEES 95%% band [%.2f, %.2f])" %
-             (len(results), a.runs, a.seed, band[0], band[1]), "",
+             (len(results), a.runs, seed, band[0], band[1]), "",
              "| case | configuration | ATE [m] | ATE posyaw [m] | NEES pose | consistent | ATE / best paper |",
              "|---|---|---|---|---|---|---|"]
     for r in rows:
@@ -124,18 +108,92 @@ def main():
             r["case"], r["config"], fmt(r["ate_m"]), fmt(r["ate_posyaw_m"]), fmt(r["nees_pose"], 2),
             "" if r["nees_inside_band"] else " (!)", fmt(r["consistent_fraction"], 2),
             fmt(r["ate_over_best_paper"], 2)))
-    lines += ["", "Worst case over the %d cases:" % len(results), "",
-              "| configuration | max NEES pose | cases outside the band | min consistent | max ATE / best paper |",
-              "|---|---|---|---|---|"]
+    lines += ["", "Worst case over the %d cases:" % len(results), ""] + worst_table(worst, configs)
+    text = "\n".join(lines) + "\n"
+    with open(os.path.join(out_dir, "suite.md"), "w") as f:
+        f.write(text)
+    print(text)
+    return rows, worst, band
+
+
+def new_worst():
+    return {"nees_pose": 0.0, "consistent_fraction": 1.0, "ate_ratio": None, "outside_band": 0}
+
+
+def add_to_worst(w, row):
+    nees = row["nees_pose"] if row["nees_pose"] is not None else float("inf")
+    w["nees_pose"] = max(w["nees_pose"], nees)
+    w["consistent_fraction"] = min(w["consistent_fraction"], row["consistent_fraction"] or 0.0)
+    if row["ate_over_best_paper"] is not None:  # (none without the paper's configurations)
+        w["ate_ratio"] = max(w["ate_ratio"] or 0.0, row["ate_over_best_paper"])
+    w["outside_band"] += 0 if row["nees_inside_band"] else 1
+
+
+def worst_table(worst, configs):
+    lines = ["| configuration | max NEES pose | cases outside the band | min consistent | max ATE / best paper |",
+             "|---|---|---|---|---|"]
     for c in configs:
         w = worst[c]
         lines.append("| %s | %s | %d | %s | %s |" % (c, fmt(w["nees_pose"], 2), w["outside_band"],
                                                      fmt(w["consistent_fraction"], 2), fmt(w["ate_ratio"], 2)))
+    return lines
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("--study", required=True, help="the vi_ekf_slam_study binary")
+    ap.add_argument("--data", default=os.environ.get("DATA_DIR", "../shared/data"))
+    ap.add_argument("--out", default="results/suite")
+    ap.add_argument("--runs", type=int, default=8)
+    ap.add_argument("--seed", default="1", help="a seed, or several (1,2,3): each in OUT/seed_N, worst over all")
+    ap.add_argument("--configs", default=",".join(DEFAULT_CONFIGS))
+    ap.add_argument("--threads", type=int, default=os.cpu_count() or 1)
+    ap.add_argument("extra", nargs="*", help="more options for every study call (after --)")
+    a = ap.parse_args()
+    try:
+        seeds = [int(x) for x in a.seed.split(",")]
+    except ValueError:
+        sys.exit("suite: --seed takes integers, comma-separated")
+
+    walks = os.path.join(a.out, "walks")
+    subprocess.run([sys.executable, os.path.join(HERE, "make_walks.py"), walks], check=True, stdout=subprocess.DEVNULL)
+    configs = a.configs.split(",")
+    t_start = time.time()
+    if len(seeds) == 1:
+        run_cases(a, seeds[0], a.out, walks, configs)
+        print("suite: %.1f min, written to %s" % ((time.time() - t_start) / 60, a.out))
+        return
+
+    # Several seeds: each as above in its own folder, then per case and configuration the pose NEES
+    # (consistent fraction) of every seed, and the worst case over all cases and seeds.
+    per_seed = {}
+    for seed in seeds:
+        rows, _, band = run_cases(a, seed, os.path.join(a.out, "seed_%d" % seed), walks, configs)
+        per_seed[seed] = {(r["case"], r["config"]): r for r in rows}
+    worst = {c: new_worst() for c in configs}
+    lines = ["# Suite: %d runs per case, seeds %s (pose NEES 95%% band [%.2f, %.2f])" %
+             (a.runs, ", ".join(map(str, seeds)), band[0], band[1]), "",
+             "| case | configuration | " + " | ".join("seed %d: NEES pose (consistent)" % s for s in seeds) + " |",
+             "|---|---|" + "---|" * len(seeds)]
+    for key in per_seed[seeds[0]]:
+        cells = []
+        for seed in seeds:
+            r = per_seed[seed][key]
+            add_to_worst(worst[key[1]], r)
+            cells.append("%s%s (%s)" % (fmt(r["nees_pose"], 2), "" if r["nees_inside_band"] else " (!)",
+                                        fmt(r["consistent_fraction"], 2)))
+        lines.append("| %s | %s | %s |" % (key[0], key[1], " | ".join(cells)))
+    lines += ["", "Worst case over every case and seed (cases outside the band counted once per seed):", ""]
+    lines += worst_table(worst, configs)
     text = "\n".join(lines) + "\n"
-    with open(os.path.join(a.out, "suite.md"), "w") as f:
+    with open(os.path.join(a.out, "suite_seeds.md"), "w") as f:
         f.write(text)
+    with open(os.path.join(a.out, "suite_seeds.json"), "w") as f:
+        json.dump({"runs": a.runs, "seeds": seeds, "pose_nees_band": band, "worst": worst,
+                   "rows": [per_seed[s][k] | {"seed": s} for s in seeds for k in per_seed[s]],
+                   "minutes": (time.time() - t_start) / 60}, f, indent=1)
     print(text)
-    print("suite: %.1f min, written to %s" % ((time.time() - t_start) / 60, a.out))
+    print("suite: %.1f min, written to %s (seed_N/ per seed, suite_seeds.md)" % ((time.time() - t_start) / 60, a.out))
 
 
 if __name__ == "__main__":
