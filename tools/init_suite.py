@@ -20,6 +20,7 @@ import os
 import subprocess
 import sys
 
+from study_cli import add_study_options
 from suite import fmt
 
 TRAJECTORIES = [("builtin", "builtin"), ("tum_corridor", "trajectories/tum_corridor1_512_16_okvis.txt"),
@@ -41,10 +42,7 @@ def study(a, traj, init, out):
 
 def main():
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    ap.add_argument("--study", required=True, help="the vi_ekf_slam_study binary")
-    ap.add_argument("--data", default=os.environ.get("DATA_DIR", "../shared/data"))
-    ap.add_argument("--out", default="results/init_suite")
-    ap.add_argument("--runs", type=int, default=20)
+    add_study_options(ap, out="results/init_suite", runs=20)
     ap.add_argument("--starts", type=int, default=5)
     ap.add_argument("--window", type=float, default=20.0, help="seconds from each start")
     ap.add_argument("--seed", type=int, default=1)

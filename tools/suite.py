@@ -23,6 +23,8 @@ import subprocess
 import sys
 import time
 
+from study_cli import add_study_options
+
 HERE = os.path.dirname(os.path.abspath(__file__))
 PAPER = ["world_centric", "sensor_centric", "sensor_centric_composition"]
 DEFAULT_CONFIGS = PAPER + [
@@ -141,10 +143,7 @@ def worst_table(worst, configs):
 
 def main():
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    ap.add_argument("--study", required=True, help="the vi_ekf_slam_study binary")
-    ap.add_argument("--data", default=os.environ.get("DATA_DIR", "../shared/data"))
-    ap.add_argument("--out", default="results/suite")
-    ap.add_argument("--runs", type=int, default=8)
+    add_study_options(ap, out="results/suite", runs=8)
     ap.add_argument("--seed", default="1", help="a seed, or several (1,2,3): each in OUT/seed_N, worst over all")
     ap.add_argument("--configs", default=",".join(DEFAULT_CONFIGS))
     ap.add_argument("--threads", type=int, default=os.cpu_count() or 1)
