@@ -207,11 +207,13 @@ std::optional<DynamicInitResult> DynamicInitializer::tryInitialize(std::string* 
   // residual's times `scale` (1: normalized coordinates, f_px: pixels).
   const double ba_sigma = std::max(1e-6, params_.accel_bias_sigma_mps2);
   auto biasPriorWeight = [&](double scale) { return std::pow(scale * params_.pixel_noise_px / f_px / ba_sigma, 2); };
-  auto cameraPoint = [&](int k, const Vec3& pf, const VecY& yy) {
-    const double t = times[static_cast<size_t>(k)] - times.front();
-    const Preintegrated& P = pre[static_cast<size_t>(k)];
+  // The feature pf in the camera of a frame t after the first, integrated as P.
+  auto cameraPointWith = [&](const Preintegrated& P, double t, const Vec3& pf, const VecY& yy) {
     const Vec3 p_k = yy.head<3>() * t + 0.5 * yy.segment<3>(3) * t * t + P.alpha + P.A * yy.tail<3>();
     return Vec3(R_c_b * P.R.transpose() * (pf - p_k) + p_c_b);
+  };
+  auto cameraPoint = [&](int k, const Vec3& pf, const VecY& yy) {
+    return cameraPointWith(pre[static_cast<size_t>(k)], times[static_cast<size_t>(k)] - times.front(), pf, yy);
   };
   // The alignment with the frames shifted by dt on the IMU clock; returns the reprojection error
   // sum [px^2], or infinity when it has no solution or puts a feature behind the camera.
@@ -726,8 +728,7 @@ std::optional<DynamicInitResult> DynamicInitializer::tryInitialize(std::string* 
       std::array<double, 2> rho{};
       for (int sgn = 0; sgn < 2; ++sgn) {
         const Preintegrated& pk = PK_bg[static_cast<size_t>(k)][static_cast<size_t>(sgn)];
-        const Vec3 p_K = y.head<3>() * t_K + 0.5 * y.segment<3>(3) * t_K * t_K + pk.alpha + pk.A * y.tail<3>();
-        rho[static_cast<size_t>(sgn)] = 1.0 / (R_c_b * pk.R.transpose() * (p_f[j] - p_K) + p_c_b).z();
+        rho[static_cast<size_t>(sgn)] = 1.0 / cameraPointWith(pk, t_K, p_f[j], y).z();
       }
       d(k) += (rho[0] - rho[1]) / (2.0 * kBgStep);
     }
