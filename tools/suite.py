@@ -58,8 +58,8 @@ def fmt(v, digits=3):
 
 
 def run_cases(a, seed, out_dir, walks, configs):
-    """The study on every case with one seed: OUT_DIR/<case>/, suite.json and suite.md; the rows
-    (case x configuration) and each configuration's worst case."""
+    """The study on every case with one seed: OUT_DIR/<case>/, suite.json and suite.md; returns the
+    rows (case x configuration) and the pose NEES band."""
     results = {}
     t_start = time.time()
     for name, traj, start, window in cases(a.data, walks):
@@ -106,16 +106,20 @@ def run_cases(a, seed, out_dir, walks, configs):
              "| case | configuration | ATE [m] | ATE posyaw [m] | NEES pose | consistent | ATE / best paper |",
              "|---|---|---|---|---|---|---|"]
     for r in rows:
-        lines.append("| %s | %s | %s | %s | %s%s | %s | %s |" % (
-            r["case"], r["config"], fmt(r["ate_m"]), fmt(r["ate_posyaw_m"]), fmt(r["nees_pose"], 2),
-            "" if r["nees_inside_band"] else " (!)", fmt(r["consistent_fraction"], 2),
-            fmt(r["ate_over_best_paper"], 2)))
+        lines.append("| %s | %s | %s | %s | %s | %s | %s |" % (
+            r["case"], r["config"], fmt(r["ate_m"]), fmt(r["ate_posyaw_m"]), nees_cell(r),
+            fmt(r["consistent_fraction"], 2), fmt(r["ate_over_best_paper"], 2)))
     lines += ["", "Worst case over the %d cases:" % len(results), ""] + worst_table(worst, configs)
     text = "\n".join(lines) + "\n"
     with open(os.path.join(out_dir, "suite.md"), "w") as f:
         f.write(text)
     print(text)
-    return rows, worst, band
+    return rows, band
+
+
+def nees_cell(row):
+    """The pose NEES, marked (!) outside the band."""
+    return fmt(row["nees_pose"], 2) + ("" if row["nees_inside_band"] else " (!)")
 
 
 def new_worst():
@@ -167,7 +171,7 @@ def main():
     # (consistent fraction) of every seed, and the worst case over all cases and seeds.
     per_seed = {}
     for seed in seeds:
-        rows, _, band = run_cases(a, seed, os.path.join(a.out, "seed_%d" % seed), walks, configs)
+        rows, band = run_cases(a, seed, os.path.join(a.out, "seed_%d" % seed), walks, configs)
         per_seed[seed] = {(r["case"], r["config"]): r for r in rows}
     worst = {c: new_worst() for c in configs}
     lines = ["# Suite: %d runs per case, seeds %s (pose NEES 95%% band [%.2f, %.2f])" %
@@ -179,8 +183,7 @@ def main():
         for seed in seeds:
             r = per_seed[seed][key]
             add_to_worst(worst[key[1]], r)
-            cells.append("%s%s (%s)" % (fmt(r["nees_pose"], 2), "" if r["nees_inside_band"] else " (!)",
-                                        fmt(r["consistent_fraction"], 2)))
+            cells.append("%s (%s)" % (nees_cell(r), fmt(r["consistent_fraction"], 2)))
         lines.append("| %s | %s | %s |" % (key[0], key[1], " | ".join(cells)))
     lines += ["", "Worst case over every case and seed (cases outside the band counted once per seed):", ""]
     lines += worst_table(worst, configs)
