@@ -30,10 +30,11 @@ DelayedLandmarks::Selection DelayedLandmarks::select(const FilterState& state,
                                                      const std::vector<FeatureObservation>& fresh,
                                                      const CameraModel& camera, const CameraExtrinsics& T_b_c,
                                                      const TriangulationParams& params, double pixel_var,
-                                                     double gate_probability, bool wait, int fill,
-                                                     double prior_inverse_depth_sigma) {
+                                                     double gate_probability, bool wait, double scene_inverse_depth,
+                                                     int fill, double prior_inverse_depth_sigma) {
   Selection out;
   out.wait = wait;
+  const double max_rho_sigma = params.max_relative_depth_sigma * scene_inverse_depth;
   std::unordered_map<std::int64_t, Waiting> still;  // the waiting tracks seen in this image
   const double gate = chiSquaredQuantile(gate_probability, 1.0);
   struct Waited {
@@ -54,7 +55,7 @@ DelayedLandmarks::Selection DelayedLandmarks::select(const FilterState& state,
     TriangulatedLandmark l;
     const bool ok =
         triangulateLandmark(state, *clone, w->second.uv_clone, f.uv, camera, T_b_c, pixel_var, params.min_depth_m, &l);
-    if (ok && l.relative_depth_sigma <= params.max_relative_depth_sigma) {
+    if (ok && l.P_ll(2, 2) <= max_rho_sigma * max_rho_sigma) {
       // The rays' gap is tested only now: with little parallax their plane, and the gap's first-order
       // variance, are not defined.
       if (l.ray_gap_nis > gate) continue;  // the two views do not meet: forget (restarts as a new track)

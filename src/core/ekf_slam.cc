@@ -468,10 +468,10 @@ void EkfSlam::addLandmarksDelayed(const std::vector<FeatureObservation>& fresh, 
   // swaying, starting) they are handled as without the delay: at the prior depth when the rules
   // of the zero-velocity detector let them in.
   const bool wait = seen_moving_;
-  DelayedLandmarks::Selection sel =
-      delayed_.select(state_, fresh, camera_, T_b_c_, config_.triangulation, pixel_var, config_.update.gate_probability,
-                      wait, config_.triangulation.min_map_landmarks - (state_.numLandmarks() - delayed_.clones()),
-                      config_.inverse_depth_sigma);
+  DelayedLandmarks::Selection sel = delayed_.select(
+      state_, fresh, camera_, T_b_c_, config_.triangulation, pixel_var, config_.update.gate_probability, wait,
+      1.0 / newLandmarkDepth(), config_.triangulation.min_map_landmarks - (state_.numLandmarks() - delayed_.clones()),
+      config_.inverse_depth_sigma);
   // The expired (not waiting, or taken by a map short of landmarks) enter at the prior depth, as
   // without the delay, unless the zero-velocity rules hold new tracks back.
   std::vector<FeatureObservation> at_prior;

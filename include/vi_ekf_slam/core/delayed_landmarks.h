@@ -3,7 +3,12 @@
 // A track not in the map is attached to a clone of the camera position taken at an image where it
 // is seen (one clone serves every track that starts within clone_interval_s). At each image, each
 // waiting track is triangulated from its clone's view and the current one; it enters the map once
-// its depth is known to max_relative_depth_sigma and its two rays meet (chi^2 gate). A track that
+// its inverse depth is known to max_relative_depth_sigma of the scene's inverse depth and its two
+// rays meet (chi^2 gate). The scene's, not its own: a track is tried at every image, and a gate on
+// its own noisy estimate lets each track in at the first image whose noise puts it near (small
+// sigma(rho) / rho), so the map's points entered too near on average (half their distance on a slow
+// start, with the velocity following them; docs/suite.md). sigma(rho) depends on the baseline and
+// the rays' geometry, not on the pixel noise's draw, so that gate selects nothing. A track that
 // has not got there after max_wait_s (a far point, a rotation in place) is forgotten and starts
 // again on a newer clone. Waiting costs the filter those tracks' information: a map with fewer
 // than min_map_landmarks (a start, a reset, a new scene) takes the longest waiting once they have
@@ -23,11 +28,12 @@
 namespace vi_ekf_slam {
 
 struct TriangulationParams {
-  bool enabled = true;                    ///< new tracks wait for a baseline (else enter at the prior depth)
-  double max_relative_depth_sigma = 0.3;  ///< a track enters once sigma(rho) / rho is below this
-  double clone_interval_s = 0.1;          ///< at most one clone of the camera position per this interval [s]
-  double max_wait_s = 1.0;                ///< a track still waiting after this starts again on a newer clone [s]
-  double min_depth_m = 0.1;               ///< a track triangulated nearer than this to a camera is a mismatch [m]
+  bool enabled = true;  ///< new tracks wait for a baseline (else enter at the prior depth)
+  /// A track enters once sigma(rho) is below this fraction of the scene's inverse depth (select()).
+  double max_relative_depth_sigma = 0.3;
+  double clone_interval_s = 0.1;  ///< at most one clone of the camera position per this interval [s]
+  double max_wait_s = 1.0;        ///< a track still waiting after this starts again on a newer clone [s]
+  double min_depth_m = 0.1;       ///< a track triangulated nearer than this to a camera is a mismatch [m]
   /// Waiting leaves the filter without those tracks' information: a map with fewer landmarks than
   /// this (a start, a reset, a new scene) takes the longest waiting at the prior depth once they
   /// have waited starved_max_wait_s [s].
@@ -59,9 +65,12 @@ class DelayedLandmarks {
   /// landmarks: up to that many (less those triangulated) of those waiting longest, at least
   /// starved_max_wait_s, enter now: triangulated if their two views know the inverse depth better
   /// than prior_inverse_depth_sigma [1/m] (the prior of a new track), else expired (for the prior).
+  /// scene_inverse_depth [1/m]: the scene's typical inverse depth (the filter's scene-depth prior),
+  /// which max_relative_depth_sigma is relative to.
   Selection select(const FilterState& state, const std::vector<FeatureObservation>& fresh, const CameraModel& camera,
                    const CameraExtrinsics& T_b_c, const TriangulationParams& params, double pixel_var,
-                   double gate_probability, bool wait, int fill = 0, double prior_inverse_depth_sigma = 0.0);
+                   double gate_probability, bool wait, double scene_inverse_depth, int fill = 0,
+                   double prior_inverse_depth_sigma = 0.0);
   /// Step 2: appends up to `capacity` of the selected landmarks (returns their ids), stops waiting
   /// for the expired ones, attaches the fresh tracks not yet waiting to a clone taken now (if the
   /// selection waits, the last clone is older than clone_interval_s and there is room), and

@@ -37,9 +37,8 @@ struct TriangulatedLandmark {
   /// d(l)/d(p_s_b, psi_s_b, clone position) and d(l)/d(pixel now, pixel at the clone, clone rotation)
   Eigen::Matrix<double, 3, 9> J_state;
   Eigen::Matrix<double, 3, 7> J_noise;
-  Mat3 P_ll = Mat3::Zero();           ///< covariance of l
-  double depth_m = 0.0;               ///< along the current camera's z axis [m]
-  double relative_depth_sigma = 0.0;  ///< std-dev of rho over rho (1: unknown)
+  Mat3 P_ll = Mat3::Zero();  ///< covariance of l
+  double depth_m = 0.0;      ///< along the current camera's z axis [m]
   /// The two rays' closest distance, squared, over its variance (chi^2 with 1 dof): a track whose
   /// two views do not meet is a mismatch.
   double ray_gap_nis = 0.0;
