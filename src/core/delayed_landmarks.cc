@@ -55,7 +55,10 @@ DelayedLandmarks::Selection DelayedLandmarks::select(const FilterState& state,
     TriangulatedLandmark l;
     const bool ok =
         triangulateLandmark(state, *clone, w->second.uv_clone, f.uv, camera, T_b_c, pixel_var, params.min_depth_m, &l);
-    if (ok && l.P_ll(2, 2) <= max_rho_sigma * max_rho_sigma) {
+    // rho ~ 1 / baseline: its first-order covariance holds only where the baseline is known to a
+    // fraction of itself (a sway's few centimetres, with the velocity known to 0.05 m/s, are not).
+    if (ok && l.P_ll(2, 2) <= max_rho_sigma * max_rho_sigma &&
+        l.baseline_relative_sigma <= params.max_relative_depth_sigma) {
       // The rays' gap is tested only now: with little parallax their plane, and the gap's first-order
       // variance, are not defined.
       if (l.ray_gap_nis > gate) continue;  // the two views do not meet: forget (restarts as a new track)

@@ -462,24 +462,20 @@ bool EkfSlam::triangulationActive() const {
 
 void EkfSlam::addLandmarksDelayed(const std::vector<FeatureObservation>& fresh, double t, bool defer, FrameResult* r) {
   const double pixel_var = config_.update.pixel_noise_px * config_.update.pixel_noise_px;
-  // Tracks wait for their baseline only while the rig is seen moving: the baseline then comes
-  // within max_wait_s, and a point entering at the prior depth would be linearized at a depth
-  // that may be off by a factor of five while the camera moves under it. Otherwise (standing,
-  // swaying, starting) they are handled as without the delay: at the prior depth when the rules
-  // of the zero-velocity detector let them in.
-  const bool wait = seen_moving_;
-  DelayedLandmarks::Selection sel = delayed_.select(
-      state_, fresh, camera_, T_b_c_, config_.triangulation, pixel_var, config_.update.gate_probability, wait,
-      1.0 / newLandmarkDepth(), config_.triangulation.min_map_landmarks - (state_.numLandmarks() - delayed_.clones()),
-      config_.inverse_depth_sigma);
-  // The expired (not waiting, or taken by a map short of landmarks) enter at the prior depth, as
-  // without the delay, unless the zero-velocity rules hold new tracks back.
-  std::vector<FeatureObservation> at_prior;
-  if (defer) {
-    r->deferred_features = static_cast<int>(sel.expired.size());
-  } else {
-    at_prior = sel.expired;
-  }
+  // Tracks wait for their baseline while the rig is seen moving (the baseline then comes within
+  // max_wait_s; a point entering at the prior depth would be linearized at a depth that may be
+  // off by a factor of five while the camera moves under it) and while the zero-velocity rules
+  // hold new tracks back (standing, swaying, a start the detector cannot tell yet): a track then
+  // enters only with the full baseline and depth gate, never at the prior depth, and a short map
+  // does not take the waiting ones early (a sway's two views are what the rules keep out). At
+  // rest by the IMU they enter at the prior depth, as without the delay.
+  const bool wait = seen_moving_ || defer;
+  const int fill = defer ? 0 : config_.triangulation.min_map_landmarks - (state_.numLandmarks() - delayed_.clones());
+  const DelayedLandmarks::Selection sel =
+      delayed_.select(state_, fresh, camera_, T_b_c_, config_.triangulation, pixel_var, config_.update.gate_probability,
+                      wait, 1.0 / newLandmarkDepth(), fill, config_.inverse_depth_sigma);
+  // The expired (not waiting, or taken by a map short of landmarks) enter at the prior depth.
+  const std::vector<FeatureObservation>& at_prior = sel.expired;
   // Room for both and for a clone.
   r->removed_ids = makeRoomInTheMap(t, static_cast<int>(sel.triangulated.size() + at_prior.size()) + 1);
   const int capacity = config_.max_landmarks - state_.numLandmarks();
@@ -487,6 +483,7 @@ void EkfSlam::addLandmarksDelayed(const std::vector<FeatureObservation>& fresh, 
   r->new_triangulated = static_cast<int>(r->new_ids.size());
   for (auto id : r->new_ids) last_seen_[id] = t;
   for (auto id : addLandmarks(at_prior, t)) r->new_ids.push_back(id);
+  if (defer) r->deferred_features = static_cast<int>(fresh.size()) - r->new_triangulated;
   r->waiting_features = delayed_.waitingTracks();
 }
 

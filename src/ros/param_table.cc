@@ -185,7 +185,9 @@ std::vector<ParamSpec> makeTable() {
       field("zero_velocity_gate_probability", "standing", VI_FIELD(p.filter.zero_velocity.gate_probability),
             "probability", "chi-square gate of the zero-velocity update", dyn, 0.5, 0.999999),
       field("zero_velocity_defer_landmarks", "standing", VI_FIELD(p.filter.zero_velocity.defer_landmarks), "",
-            "new landmarks wait until the rig is seen moving (parallax), unless the IMU shows rest", dyn),
+            "new tracks enter at the prior depth only once the rig is seen moving (parallax) or the IMU shows "
+            "rest; with the delayed entry they may enter triangulated meanwhile",
+            dyn),
       field("zero_velocity_moving_parallax_px", "standing", VI_FIELD(p.filter.zero_velocity.moving_parallax_px), "px",
             "seen moving (new landmarks enter) from this parallax, latched until the next stand; >= "
             "zero_velocity_max_parallax_px",

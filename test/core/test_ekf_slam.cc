@@ -216,7 +216,8 @@ CameraFrame firstImageWhileWalking(EkfSlam& f, std::vector<FeatureObservation> f
 // the filter's own speed tells a walk before the parallax detector has its first window: a rig that
 // starts at 1 m/s (sigma 0.05 m/s) takes its first tracks at once (into the map at the prior
 // depth, or, with the delayed entry, waiting on a clone for their baseline); one that starts at 0
-// holds them back.
+// holds them back (from the prior depth; with the delayed entry they wait on a clone all the same,
+// held to the full baseline).
 TEST(EkfSlam, NewTracksAreTakenAtOnceWhenTheFilterKnowsTheRigIsWalking) {
   auto firstFrame = [](double speed_mps, bool triangulate) {
     EkfSlamConfig cfg;
@@ -235,7 +236,30 @@ TEST(EkfSlam, NewTracksAreTakenAtOnceWhenTheFilterKnowsTheRigIsWalking) {
   EXPECT_EQ(firstFrame(1.0, false), std::make_tuple(10, 0, 0));
   EXPECT_EQ(firstFrame(0.0, false), std::make_tuple(0, 0, 10));
   EXPECT_EQ(firstFrame(1.0, true), std::make_tuple(0, 10, 0));
-  EXPECT_EQ(firstFrame(0.0, true), std::make_tuple(0, 0, 10));
+  EXPECT_EQ(firstFrame(0.0, true), std::make_tuple(0, 10, 10));  // waiting on a clone, held to the full baseline
+}
+
+// While the zero-velocity rules hold new tracks back (a rig that jitters on the spot, no parallax),
+// the tracks wait on clones, and a map short of landmarks does not take them early: a sway's two
+// views (or the prior depth) are what the rules keep out. Nothing enters in 0.8 s, though the map
+// is empty and starved_max_wait_s (0.3 s) has passed.
+TEST(EkfSlam, WhileTheRulesHoldTracksBackAShortMapTakesNoneEarly) {
+  EkfSlamConfig cfg;
+  ASSERT_LT(cfg.triangulation.starved_max_wait_s, 0.5);
+  EkfSlam f(cfg, sim::paperCamera(), sim::torsoCameraExtrinsics());
+  startWalkingWithJitter(f, 0.0, 1.0);
+  FrameResult r;
+  for (int k = 1; k <= 16; ++k) {
+    CameraFrame frame;
+    frame.timestamp = 0.05 * k;
+    for (int i = 0; i < 10; ++i) frame.features.push_back({i, Eigen::Vector2d(100.0 + 40.0 * i, 200.0 + 10.0 * i)});
+    r = f.processFrame(frame);
+    ASSERT_TRUE(r.processed);
+    EXPECT_TRUE(r.new_ids.empty()) << frame.timestamp;
+  }
+  EXPECT_TRUE(f.landmarks().empty());
+  EXPECT_EQ(r.deferred_features, 10);
+  EXPECT_EQ(r.waiting_features, 10);
 }
 
 // A feature whose id is in the clones' range is refused (it would observe a clone), not mapped.

@@ -358,3 +358,47 @@ TEST(DelayedLandmarks, EnteredInverseDepthsAreNotSelectedByTheirNoise) {
   EXPECT_LT(std::abs(mean), 0.4);  // the standard error of the mean is 0.06
   EXPECT_LT(var, 1.5);             // and their sigma is honest (0.82)
 }
+
+// rho ~ 1 / baseline is far from linear where the baseline is poorly known: a track waits until
+// the baseline that makes its depth is known to max_relative_depth_sigma of itself, even if its
+// sigma(rho) already passes the scene's gate (a point far beyond a near scene). A 10 m point in a
+// 2 m scene, 0.2 m sideways: with the baseline known to 0.1 m it waits, to 0.02 m it enters.
+TEST(DelayedLandmarks, ATrackWaitsWhileTheBaselineThatMakesItsDepthIsUncertain) {
+  const CameraModel cam = test::paperCamera();
+  const CameraExtrinsics T = test::forwardCamera();
+  const Vec3 point(1.0, 0.5, 10.0);  // in the first camera
+  const double scene_inverse_depth = 0.5;
+  for (const double baseline_sigma_m : {0.1, 0.02}) {
+    FilterState s(Mechanization::kSensorCentricComposition);
+    s.setCovariance(1e-8 * Eigen::MatrixXd::Identity(s.dim(), s.dim()));
+    TriangulationParams p;
+    DelayedLandmarks d;
+    auto frame = [&]() {
+      Eigen::Vector2d uv;
+      EXPECT_TRUE(cam.project(landmarkInCamera(s.x, T.R_b_c * point + T.p_b_c, T), &uv));
+      return std::vector<FeatureObservation>{{1, uv}};
+    };
+    s.timestamp = 0.0;
+    auto sel = d.select(s, frame(), cam, T, p, 1.0, 0.99, true, scene_inverse_depth);
+    d.commit(s, sel, frame(), 10, T, p);
+    ASSERT_EQ(d.clones(), 1);
+    // Moved 0.2 m sideways; the position's uncertainty grew by baseline_sigma_m since the clone.
+    s.timestamp = 0.4;
+    s.x.p_s_b = T.R_b_c * Vec3(0.2, 0.0, 0.0);
+    Eigen::MatrixXd P = s.covariance();
+    P.block<3, 3>(idx::kP, idx::kP) += baseline_sigma_m * baseline_sigma_m * Mat3::Identity();
+    s.setCovariance(P);
+    // The triangulation itself: sigma(rho) passes the scene's gate either way.
+    CameraClone clone;
+    clone.id = s.landmarkIds()[0];
+    clone.R_s_c = T.R_b_c;
+    TriangulatedLandmark l;
+    Eigen::Vector2d uv0;
+    ASSERT_TRUE(cam.project(point, &uv0));
+    ASSERT_TRUE(triangulateLandmark(s, clone, uv0, frame()[0].uv, cam, T, 1.0, p.min_depth_m, &l));
+    EXPECT_LT(std::sqrt(l.P_ll(2, 2)), p.max_relative_depth_sigma * scene_inverse_depth);
+    EXPECT_NEAR(l.baseline_relative_sigma, baseline_sigma_m / 0.2, 0.25 * baseline_sigma_m / 0.2);
+    sel = d.select(s, frame(), cam, T, p, 1.0, 0.99, true, scene_inverse_depth);
+    EXPECT_EQ(sel.triangulated.size(), baseline_sigma_m > 0.05 ? 0u : 1u) << baseline_sigma_m;
+  }
+}

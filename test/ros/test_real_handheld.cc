@@ -172,8 +172,9 @@ TEST(RealHandheld, StartedMidWalkInitializesWhileMoving) {
       eval::readTum(std::string(std::getenv("DATA_DIR")) + "/dmvio_handheld/reference/sfm_camera_poses.txt");
   const auto whole_view = eval::referenceView(whole->sink.poses, cam.T_b_c, &whole->sink.time_offsets);
   // Bounds: from 10 s, 1.5x the run from the start (the target); from 30 s it is not met
-  // (docs/initialization.md), the bound is 30% above what was measured.
-  for (const auto& [start, max_ratio] : {std::pair{10.0, 1.5}, std::pair{30.0, 2.6}}) {
+  // (docs/initialization.md), the bound is 30% above what was measured (2.68x: 0.012 m against
+  // 0.004 m; it was 0.011 against 0.007 before new tracks waited on clones while held back).
+  for (const auto& [start, max_ratio] : {std::pair{10.0, 1.5}, std::pair{30.0, 3.5}}) {
     const auto r = runSegment(start, 15.0, "");
     ASSERT_TRUE(r);
     ASSERT_FALSE(r->sink.poses.empty());

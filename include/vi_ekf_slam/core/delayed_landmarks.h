@@ -3,8 +3,9 @@
 // A track not in the map is attached to a clone of the camera position taken at an image where it
 // is seen (one clone serves every track that starts within clone_interval_s). At each image, each
 // waiting track is triangulated from its clone's view and the current one; it enters the map once
-// its inverse depth is known to max_relative_depth_sigma of the scene's inverse depth and its two
-// rays meet (chi^2 gate). The scene's, not its own: a track is tried at every image, and a gate on
+// its inverse depth is known to max_relative_depth_sigma of the scene's inverse depth, the baseline
+// that makes it to max_relative_depth_sigma of itself, and its two rays meet (chi^2 gate). The
+// scene's, not its own: a track is tried at every image, and a gate on
 // its own noisy estimate lets each track in at the first image whose noise puts it near (small
 // sigma(rho) / rho), so the map's points entered too near on average (half their distance on a slow
 // start, with the velocity following them; docs/suite.md). sigma(rho) depends on the baseline and
@@ -13,9 +14,9 @@
 // again on a newer clone. Waiting costs the filter those tracks' information: a map with fewer
 // than min_map_landmarks (a start, a reset, a new scene) takes the longest waiting once they have
 // waited starved_max_wait_s, with their two-view depth if it beats the prior, else at the prior
-// depth. While the rig is not seen moving new tracks do not wait: they are handed back (to the
-// prior depth and the zero-velocity rules, as without the delay). Clones no track waits on leave
-// the state.
+// depth (not while the zero-velocity rules hold new tracks back: fill 0). When the caller does not
+// wait (a rig at rest), new tracks are handed back for the prior depth. Clones no track waits on
+// leave the state.
 #pragma once
 
 #include <cstdint>
@@ -29,7 +30,8 @@ namespace vi_ekf_slam {
 
 struct TriangulationParams {
   bool enabled = true;  ///< new tracks wait for a baseline (else enter at the prior depth)
-  /// A track enters once sigma(rho) is below this fraction of the scene's inverse depth (select()).
+  /// A track enters once sigma(rho) is below this fraction of the scene's inverse depth (select())
+  /// and the baseline's share of it below this fraction of rho.
   double max_relative_depth_sigma = 0.3;
   double clone_interval_s = 0.1;  ///< at most one clone of the camera position per this interval [s]
   double max_wait_s = 1.0;        ///< a track still waiting after this starts again on a newer clone [s]

@@ -39,6 +39,10 @@ struct TriangulatedLandmark {
   Eigen::Matrix<double, 3, 7> J_noise;
   Mat3 P_ll = Mat3::Zero();  ///< covariance of l
   double depth_m = 0.0;      ///< along the current camera's z axis [m]
+  /// The std-dev of rho from the state's uncertainty alone (the baseline from the clone to the
+  /// camera, the camera's orientation), over rho: how well the baseline that makes the depth is
+  /// itself known. About sigma(baseline) / baseline, whatever the pixel noise's draw.
+  double baseline_relative_sigma = 0.0;
   /// The two rays' closest distance, squared, over its variance (chi^2 with 1 dof): a track whose
   /// two views do not meet is a mismatch.
   double ray_gap_nis = 0.0;

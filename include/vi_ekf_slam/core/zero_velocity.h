@@ -39,9 +39,11 @@ struct ZeroVelocityParams {
   /// standing cannot be told from walking) has no parallax; when the rig sways or jitters in a
   /// hand, its unknown depth enters later observations only through the product depth x sway,
   /// which the linearized filter turns into false confidence in the velocity and, once walking
-  /// starts, in roll and pitch (README, TUM corridor). So new landmarks wait until the detector
-  /// sees the rig move, unless the IMU shows it at rest (zero parallax then pins the velocity
-  /// exactly, which is safe). Landmarks already in the map are updated as always.
+  /// starts, in roll and pitch (README, TUM corridor). So new tracks do not enter at the prior
+  /// depth until the detector sees the rig move, unless the IMU shows it at rest (zero parallax
+  /// then pins the velocity exactly, which is safe); with the delayed entry they wait on a clone
+  /// meanwhile and enter only once their baseline triangulates them (a slow shuffle's does, a
+  /// sway's does not; delayed_landmarks.h). Landmarks already in the map are updated as always.
   bool defer_landmarks = true;
   /// Seen moving (latched until the next stand): median de-rotated parallax over window_s at least
   /// this [px]. A rig swaying in a hand shows 2-5 px, above max_parallax_px but without the
