@@ -94,9 +94,9 @@ bool triangulateLandmark(const FilterState& state, const CameraClone& clone, con
   Eigen::Matrix<double, 7, 7> noise = Eigen::Matrix<double, 7, 7>::Zero();
   noise.topLeftCorner<4, 4>().diagonal().setConstant(pixel_var);
   noise.bottomRightCorner<3, 3>() = clone.rotation_cov;
-  t.P_ll = t.J_state * P_x * t.J_state.transpose() + t.J_noise * noise * t.J_noise.transpose();
-  t.baseline_relative_sigma =
-      std::sqrt(std::max(0.0, (t.J_state.row(2) * P_x * t.J_state.row(2).transpose())(0, 0))) * d(0);
+  const Mat3 P_from_state = t.J_state * P_x * t.J_state.transpose();
+  t.P_ll = P_from_state + t.J_noise * noise * t.J_noise.transpose();
+  t.baseline_relative_sigma = std::sqrt(std::max(0.0, P_from_state(2, 2))) * d(0);
   const double gap_var = (J_gap.leftCols<9>() * P_x * J_gap.leftCols<9>().transpose() +
                           J_gap.rightCols<7>() * noise * J_gap.rightCols<7>().transpose())(0, 0);
   const double g = n.dot(gap);

@@ -148,7 +148,8 @@ std::vector<ParamSpec> makeTable() {
       field("triangulation_max_relative_depth_sigma", "map", VI_FIELD(p.filter.triangulation.max_relative_depth_sigma),
             "ratio",
             "a waiting track enters once the std-dev of its inverse depth is below this fraction of the scene's "
-            "inverse depth (that of the depth prior of new landmarks)",
+            "inverse depth (that of the depth prior of new landmarks), and the share of it the baseline's "
+            "uncertainty brings below this fraction of its own inverse depth",
             dyn, 0.01, 1.0),
       field("triangulation_clone_interval_s", "map", VI_FIELD(p.filter.triangulation.clone_interval_s), "s",
             "at most one clone of the camera position per this interval (the new tracks of later images wait on the "
