@@ -74,8 +74,13 @@ def run_cases(a, seed, out_dir, walks, configs):
         t0 = time.time()
         proc = subprocess.run(cmd, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
         if proc.returncode != 0:
-            sys.stderr.write(proc.stdout + proc.stderr)
-            sys.exit("suite: the study failed on %s" % name)
+            # One case the study cannot run (a malformed file among the trajectories) is a row of
+            # the table, not the end of the suite; main() ends non-zero after the tables.
+            sys.stderr.write(proc.stdout[-2000:] + proc.stderr[-2000:])
+            lines = [l for l in (proc.stderr + proc.stdout).splitlines() if l.strip()]
+            results[name] = {"failed": lines[-1] if lines else "exit status %d" % proc.returncode}
+            print("  %-34s FAILED: %s" % (name, results[name]["failed"]), flush=True)
+            continue
         with open(os.path.join(out, "summary.json")) as f:
             results[name] = json.load(f)
         print("  %-34s %5.0f s" % (name, time.time() - t0), flush=True)
@@ -84,6 +89,14 @@ def run_cases(a, seed, out_dir, walks, configs):
     rows, worst = [], {c: new_worst() for c in configs}
     band = None
     for name, s in results.items():
+        if "failed" in s:
+            for c in configs:
+                row = {"case": name, "config": c, "failed": s["failed"], "ate_m": None, "ate_posyaw_m": None,
+                       "nees_pose": None, "consistent_fraction": None, "ate_over_best_paper": None,
+                       "nees_inside_band": False}
+                rows.append(row)
+                add_to_worst(worst[c], row)
+            continue
         band = s["config"]["pose_nees_band"]
         paper_ate = [s[c]["ate_position_m"] for c in PAPER if c in s and s[c]["ate_position_m"] is not None]
         best_paper = min(paper_ate) if paper_ate else None
@@ -101,6 +114,8 @@ def run_cases(a, seed, out_dir, walks, configs):
         json.dump({"runs": a.runs, "seed": seed, "pose_nees_band": band, "rows": rows, "worst": worst,
                    "minutes": (time.time() - t_start) / 60}, f, indent=1)
 
+    if band is None:
+        sys.exit("suite: the study failed on every case")
     lines = ["# Suite: %d cases, %d runs each, seed %d (pose NEES 95%% band [%.2f, %.2f])" %
              (len(results), a.runs, seed, band[0], band[1]), "",
              "| case | configuration | ATE [m] | ATE posyaw [m] | NEES pose | consistent | ATE / best paper |",
@@ -118,15 +133,20 @@ def run_cases(a, seed, out_dir, walks, configs):
 
 
 def nees_cell(row):
-    """The pose NEES, marked (!) outside the band."""
+    """The pose NEES, marked (!) outside the band; a case the study could not run says so."""
+    if "failed" in row:
+        return "failed (%s)" % row["failed"].replace("|", "/")
     return fmt(row["nees_pose"], 2) + ("" if row["nees_inside_band"] else " (!)")
 
 
 def new_worst():
-    return {"nees_pose": 0.0, "consistent_fraction": 1.0, "ate_ratio": None, "outside_band": 0}
+    return {"nees_pose": 0.0, "consistent_fraction": 1.0, "ate_ratio": None, "outside_band": 0, "failed": 0}
 
 
 def add_to_worst(w, row):
+    if "failed" in row:
+        w["failed"] += 1
+        return
     nees = row["nees_pose"] if row["nees_pose"] is not None else float("inf")
     w["nees_pose"] = max(w["nees_pose"], nees)
     w["consistent_fraction"] = min(w["consistent_fraction"], row["consistent_fraction"] or 0.0)
@@ -136,13 +156,20 @@ def add_to_worst(w, row):
 
 
 def worst_table(worst, configs):
-    lines = ["| configuration | max NEES pose | cases outside the band | min consistent | max ATE / best paper |",
-             "|---|---|---|---|---|"]
+    failed = any(worst[c]["failed"] for c in configs)
+    lines = ["| configuration | max NEES pose | cases outside the band | min consistent | max ATE / best paper |" +
+             (" cases failed |" if failed else ""),
+             "|---|---|---|---|---|" + ("---|" if failed else "")]
     for c in configs:
         w = worst[c]
         lines.append("| %s | %s | %d | %s | %s |" % (c, fmt(w["nees_pose"], 2), w["outside_band"],
-                                                     fmt(w["consistent_fraction"], 2), fmt(w["ate_ratio"], 2)))
+                                                     fmt(w["consistent_fraction"], 2), fmt(w["ate_ratio"], 2)) +
+                     (" %d |" % w["failed"] if failed else ""))
     return lines
+
+
+def any_failed(rows):
+    return any("failed" in r for r in rows)
 
 
 def main():
@@ -163,8 +190,10 @@ def main():
     configs = a.configs.split(",")
     t_start = time.time()
     if len(seeds) == 1:
-        run_cases(a, seeds[0], a.out, walks, configs)
+        rows, _ = run_cases(a, seeds[0], a.out, walks, configs)
         print("suite: %.1f min, written to %s" % ((time.time() - t_start) / 60, a.out))
+        if any_failed(rows):
+            sys.exit("suite: the study failed on some cases (the table says which)")
         return
 
     # Several seeds: each as above in its own folder, then per case and configuration the pose NEES
@@ -196,6 +225,8 @@ def main():
                    "minutes": (time.time() - t_start) / 60}, f, indent=1)
     print(text)
     print("suite: %.1f min, written to %s (seed_N/ per seed, suite_seeds.md)" % ((time.time() - t_start) / 60, a.out))
+    if any(any_failed(per_seed[s].values()) for s in seeds):
+        sys.exit("suite: the study failed on some cases (the table says which)")
 
 
 if __name__ == "__main__":

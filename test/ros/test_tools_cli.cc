@@ -113,3 +113,35 @@ TEST(ToolsCli, RunBagPicksTopicsAndReadsCompressedImages) {
   EXPECT_EQ(typo.code, 1) << typo.output;
   EXPECT_NE(typo.output.find("max_landmarks"), std::string::npos) << typo.output;
 }
+
+// The suite runs on whatever trajectories a user drops into DATA_DIR/trajectories: a file the
+// study refuses is a row of the table that says why, the other cases still run, and the suite
+// ends non-zero. (A stand-in study answers at once; the real one would take minutes per case.)
+TEST(ToolsCli, SuiteReportsACaseTheStudyCannotRunAndGoesOn) {
+  const std::string dir = "/tmp/vi_ekf_slam_suite_failure";
+  ASSERT_EQ(run("rm -rf " + dir + " && mkdir -p " + dir + "/data/trajectories").code, 0);
+  std::ofstream(dir + "/data/trajectories/broken.txt") << "10.0 1 2 3 0 0 0 1\n9.0 1 2 3 0 0 0 1\n";
+  std::ofstream(dir + "/data/trajectories/walk.txt") << "10.0 1 2 3 0 0 0 1\n";
+  std::ofstream(dir + "/study.sh") << R"(#!/bin/sh
+while [ $# -gt 0 ]; do
+  case "$1" in --trajectory) traj="$2"; shift;; --out) out="$2"; shift;; esac; shift
+done
+case "$traj" in *broken*) echo "error: $traj:2: time does not increase" >&2; exit 1;; esac
+mkdir -p "$out"
+echo '{"config": {"pose_nees_band": [3.84, 8.63]}, "default": {"ate_position_m": 0.2, "ate_posyaw_m": 0.1,
+ "nees_pose": 6.1, "consistent_fraction": 0.97}}' > "$out/summary.json"
+)";
+  ASSERT_EQ(run("chmod +x " + dir + "/study.sh").code, 0);
+  const Outcome o = run("python3 " + std::string(VI_EKF_SLAM_SOURCE_DIR) + "/tools/suite.py --study " + dir +
+                        "/study.sh --data " + dir + "/data --out " + dir + "/out --runs 2 --configs default");
+  EXPECT_EQ(o.code, 1) << o.output;
+  EXPECT_NE(o.output.find("| broken@0 | default | - | - | failed (error: " + dir +
+                          "/data/trajectories/broken.txt:2: time does not increase) |"),
+            std::string::npos)
+      << o.output;
+  EXPECT_NE(o.output.find("| walk@0 | default | 0.200 | 0.100 | 6.10 | 0.97 |"), std::string::npos) << o.output;
+  EXPECT_NE(o.output.find("| walk_stairs | default | 0.200 |"), std::string::npos) << o.output;
+  // The worst case counts it as failed, not as a NEES.
+  EXPECT_NE(o.output.find("| default | 6.10 | 0 | 0.97 | - | 1 |"), std::string::npos) << o.output;
+  EXPECT_TRUE(std::ifstream(dir + "/out/suite.md").good());
+}

@@ -146,7 +146,9 @@ TEST(DynamicInit, NoiseFreeWindowGivesExactGravityVelocityAndDepths) {
     std::vector<double> depths;
     for (const auto& [id, z] : w.true_depth) depths.push_back(z);
     std::nth_element(depths.begin(), depths.begin() + static_cast<std::ptrdiff_t>(depths.size() / 2), depths.end());
-    if (r.median_depth_m > 0.0) EXPECT_NEAR(r.median_depth_m, depths[depths.size() / 2], 0.05) << t0;
+    if (r.median_depth_m > 0.0) {
+      EXPECT_NEAR(r.median_depth_m, depths[depths.size() / 2], 0.05) << t0;
+    }
     // Its uncertainty is small but not zero (the pixel noise it assumes).
     EXPECT_GT(r.velocity_sigma_mps, 0.0);
     EXPECT_LE(r.velocity_sigma_mps, DynamicInitParams().max_velocity_sigma_mps);

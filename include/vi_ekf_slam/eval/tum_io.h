@@ -1,4 +1,5 @@
-// TUM trajectory files: one pose a line, `t x y z qx qy qz qw` (body in world), `#` comments.
+// TUM trajectory files: one pose a line, `t x y z qx qy qz qw` (body in world; spaces or commas),
+// `#` comments.
 // Estimates may append the upper triangle of the 6x6 pose covariance (21 numbers, order
 // [position, orientation]).
 #pragma once
@@ -19,8 +20,9 @@ struct StampedPose {
   std::optional<Eigen::Matrix<double, 6, 6>> cov;
 };
 
-/// Reads a TUM file. Throws std::runtime_error naming the file and line for malformed input
-/// (wrong column count, non-numbers, non-finite values, zero quaternion, non-increasing time).
+/// Reads a TUM file; a line repeating the line before (same time, same pose) is skipped. Throws
+/// std::runtime_error naming the file and line for malformed input (wrong column count,
+/// non-numbers, non-finite values, zero quaternion, decreasing time, two poses at one time).
 std::vector<StampedPose> readTum(const std::string& path);
 
 /// The pose of a time-sorted sequence at time t: a pose whose stamp agrees within 1 us, else
