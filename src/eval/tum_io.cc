@@ -39,6 +39,8 @@ std::vector<StampedPose> readTum(const std::string& path) {
     for (double x : v) {
       if (!std::isfinite(x)) fail("non-finite value");
     }
+    // Unix time in seconds is about 1.7e9; in nanoseconds (EuRoC's CSV files) about 1.7e18.
+    if (std::abs(v[0]) > 1e12) fail("the time looks like nanoseconds; TUM files give seconds");
     StampedPose p;
     p.t = v[0];
     p.p = Vec3(v[1], v[2], v[3]);

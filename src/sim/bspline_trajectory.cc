@@ -32,6 +32,9 @@ BsplineTrajectory::BsplineTrajectory(const std::vector<eval::StampedPose>& poses
   if (poses.size() < 4) throw std::invalid_argument("trajectory needs at least 4 poses");
   t0_ = poses.front().t;
   const double span = poses.back().t - t0_;
+  // (A span of years is a file whose stamps are not seconds; the knot count would overflow.)
+  if (!(span / dt_ < 1e8))
+    throw std::invalid_argument("trajectory spans more than 1e8 knot spacings: stamps in seconds?");
   const int n = static_cast<int>(std::floor(span / dt_ + 1e-9)) + 1;
   if (n < 5) throw std::invalid_argument("trajectory is shorter than 4 knot spacings");
   // Resample at the knots: linear in position, slerp in attitude.

@@ -63,6 +63,8 @@ TEST(TumIo, ContradictionsAreRefusedWithTheirLine) {
   EXPECT_NE(backwards.find(":3: time does not increase"), std::string::npos) << backwards;
   const std::string columns = errorOf(writeFile("columns", "10.0 1 2 3 0 0 1\n"));
   EXPECT_NE(columns.find(":1: 7 columns"), std::string::npos) << columns;
+  const std::string nanoseconds = errorOf(writeFile("ns", "1550864017670950000 1 2 3 0 0 0 1\n"));
+  EXPECT_NE(nanoseconds.find(":1: the time looks like nanoseconds"), std::string::npos) << nanoseconds;
   const std::string word = errorOf(writeFile("word", "10.0 1 2 3 0 0 zero 1\n"));
   EXPECT_NE(word.find("'zero' is not a number"), std::string::npos) << word;
 }

@@ -22,7 +22,8 @@ struct StampedPose {
 
 /// Reads a TUM file; a line repeating the line before (same time, same pose) is skipped. Throws
 /// std::runtime_error naming the file and line for malformed input (wrong column count,
-/// non-numbers, non-finite values, zero quaternion, decreasing time, two poses at one time).
+/// non-numbers, non-finite values, zero quaternion, decreasing time, two poses at one time, a
+/// time above 1e12 s: nanoseconds).
 std::vector<StampedPose> readTum(const std::string& path);
 
 /// The pose of a time-sorted sequence at time t: a pose whose stamp agrees within 1 us, else
