@@ -343,7 +343,7 @@ void writeConfigFiles(const fs::path& dir, const sim::ConsistencySummary& s, con
   std::ofstream l(dir / "landmarks_run0.csv");
   l << "id,true_x,true_y,true_z,est_x,est_y,est_z\n" << std::setprecision(8);
   for (const auto& [id, p] : run0.landmark_estimates) {
-    const Vec3& t = sc.world[static_cast<size_t>(id)].p_n;
+    const Vec3& t = sim::landmarkOfTrack(id, sc.world).p_n;
     l << id << "," << t.x() << "," << t.y() << "," << t.z() << "," << p.x() << "," << p.y() << "," << p.z() << "\n";
   }
 }

@@ -24,31 +24,49 @@ std::vector<FeatureObservation> visibleLandmarks(const TrajectorySample& s, cons
 
 TrackingCamera::TrackingCamera(const LandmarkWorld& world, const CameraModel& camera, const CameraExtrinsics& T_b_c,
                                const CameraSimParams& params)
-    : world_(world), camera_(camera), T_b_c_(T_b_c), params_(params) {}
+    : world_(world), camera_(camera), T_b_c_(T_b_c), params_(params) {
+  for (size_t i = 0; i < world_.size(); ++i) index_of_[world_[i].id] = i;
+}
+
+std::int64_t trackId(std::int64_t landmark, std::int64_t k, size_t world_size) {
+  return landmark + k * static_cast<std::int64_t>(world_size);
+}
+
+const WorldLandmark& landmarkOfTrack(std::int64_t track_id, const LandmarkWorld& world) {
+  return world.at(static_cast<size_t>(track_id % static_cast<std::int64_t>(world.size())));
+}
 
 CameraFrame TrackingCamera::observe(const TrajectorySample& s, std::mt19937_64* rng) {
-  const std::vector<FeatureObservation> visible = visibleLandmarks(s, world_, camera_, T_b_c_, params_);
+  // Visible landmarks by their index in the world (visibleLandmarks reports world ids).
   std::unordered_map<std::int64_t, Eigen::Vector2d> uv_of;
-  for (const auto& v : visible) uv_of[v.id] = v.uv;
+  std::vector<std::int64_t> visible;
+  for (const auto& v : visibleLandmarks(s, world_, camera_, T_b_c_, params_)) {
+    const auto landmark = static_cast<std::int64_t>(index_of_.at(v.id));
+    uv_of[landmark] = v.uv;
+    visible.push_back(landmark);
+  }
   const int cols = std::max(1, params_.grid_cols), rows = std::max(1, params_.grid_rows);
   auto cellOf = [&](const Eigen::Vector2d& uv) {
     const int c = std::clamp(static_cast<int>(uv.x() * cols / camera_.width()), 0, cols - 1);
     const int r = std::clamp(static_cast<int>(uv.y() * rows / camera_.height()), 0, rows - 1);
     return r * cols + c;
   };
-  // Continue the tracks that are still visible.
-  std::vector<std::int64_t> kept;
+  // Continue the tracks that are still visible; the others end for good.
+  std::vector<Track> kept;
   std::vector<int> occupancy(static_cast<size_t>(cols * rows), 0);
-  for (auto id : tracked_) {
-    auto it = uv_of.find(id);
+  for (const auto& track : tracked_) {
+    auto it = uv_of.find(track.landmark);
     if (it == uv_of.end()) continue;
-    kept.push_back(id);
+    kept.push_back(track);
     ++occupancy[static_cast<size_t>(cellOf(it->second))];
   }
   // Start new tracks, always in the currently emptiest cell (ties: a random candidate).
+  auto isKept = [&](std::int64_t landmark) {
+    return std::any_of(kept.begin(), kept.end(), [&](const Track& t) { return t.landmark == landmark; });
+  };
   std::vector<std::int64_t> candidates;
-  for (const auto& v : visible) {
-    if (std::find(kept.begin(), kept.end(), v.id) == kept.end()) candidates.push_back(v.id);
+  for (auto landmark : visible) {
+    if (!isKept(landmark)) candidates.push_back(landmark);
   }
   if (rng) std::shuffle(candidates.begin(), candidates.end(), *rng);
   std::vector<bool> used(candidates.size(), false);
@@ -64,20 +82,21 @@ CameraFrame TrackingCamera::observe(const TrajectorySample& s, std::mt19937_64* 
     }
     if (best < 0) break;
     used[static_cast<size_t>(best)] = true;
-    kept.push_back(candidates[static_cast<size_t>(best)]);
-    ++occupancy[static_cast<size_t>(cellOf(uv_of[candidates[static_cast<size_t>(best)]]))];
+    const std::int64_t landmark = candidates[static_cast<size_t>(best)];
+    kept.push_back({landmark, trackId(landmark, tracks_started_[landmark]++, world_.size())});
+    ++occupancy[static_cast<size_t>(cellOf(uv_of[landmark]))];
   }
   tracked_ = kept;
   CameraFrame f;
   f.timestamp = s.t;
   std::normal_distribution<double> n(0.0, 1.0);
-  for (auto id : kept) {
-    Eigen::Vector2d uv = uv_of[id];
+  for (const auto& track : kept) {
+    Eigen::Vector2d uv = uv_of[track.landmark];
     if (rng && params_.pixel_noise_px > 0.0) {
       const double du = n(*rng), dv = n(*rng);
       uv += params_.pixel_noise_px * Eigen::Vector2d(du, dv);
     }
-    f.features.push_back({id, uv});
+    f.features.push_back({track.id, uv});
   }
   return f;
 }

@@ -120,7 +120,7 @@ RunResult runMonteCarloRun(const Scenario& scenario_in, const EkfSlamConfig& con
     std::vector<Vec3> est, truth;
     for (const auto& l : f.landmarks()) {
       est.push_back(l.p_n_l);
-      truth.push_back(sc.world[static_cast<size_t>(l.id)].p_n);
+      truth.push_back(landmarkOfTrack(l.id, sc.world).p_n);
       out.landmark_estimates[l.id] = l.p_n_l;
     }
     m.gamma = eval::scaleRatio(est, truth);

@@ -77,10 +77,8 @@ Window runWindow(const sim::Trajectory& traj, const sim::LandmarkWorld& world, c
     last = f;
   }
   w.truth = traj.sample(last.timestamp + clock_error_s);
-  std::map<std::int64_t, Vec3> points;
-  for (const auto& l : world) points[l.id] = l.p_n;
   for (const auto& o : last.features) {
-    const Vec3 p_b = w.truth.q_n_b.conjugate() * (points.at(o.id) - w.truth.p_n_b);
+    const Vec3 p_b = w.truth.q_n_b.conjugate() * (sim::landmarkOfTrack(o.id, world).p_n - w.truth.p_n_b);
     w.true_depth[o.id] = (T_b_c.R_b_c.transpose() * (p_b - T_b_c.p_b_c)).z();
   }
   w.result = init.tryInitialize(&w.why);

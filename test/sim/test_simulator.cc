@@ -1,6 +1,8 @@
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <fstream>
+#include <set>
 
 #include "test_helpers.h"
 #include "vi_ekf_slam/core/ekf_slam.h"
@@ -279,4 +281,37 @@ TEST(Simulator, TruncatedTrajectoryIsATimeWindowOfItsBase) {
   const sim::TruncatedTrajectory past(walk, walk->endTime() + 5.0, walk->endTime() + 9.0);
   EXPECT_DOUBLE_EQ(past.startTime(), walk->endTime());
   EXPECT_DOUBLE_EQ(past.endTime(), walk->endTime());
+}
+
+TEST(Simulator, ALandmarkTrackedAgainGetsANewTrackIdThatMapsBackToIt) {
+  const sim::Scenario sc = sim::hallwayScenario(sim::HallwayParams(), 1.0, 5);
+  sim::TrackingCamera cam(sc.world, sc.camera, sc.T_b_c, sc.cam);
+  std::mt19937_64 rng(6);
+  const sim::TrajectorySample looking = sc.trajectory->sample(5.0);
+  sim::TrajectorySample away = looking;  // turned round: none of the first frame's points in view
+  away.q_n_b = (looking.q_n_b * Quat(Eigen::AngleAxisd(M_PI, Vec3::UnitZ()))).normalized();
+  const CameraFrame a = cam.observe(looking, &rng);
+  const CameraFrame gone = cam.observe(away, &rng);
+  const CameraFrame b = cam.observe(looking, &rng);
+  ASSERT_EQ(a.features.size(), b.features.size());
+  std::set<std::int64_t> ids_a, landmarks_a, ids_gone;
+  for (const auto& f : a.features) {
+    ids_a.insert(f.id);
+    landmarks_a.insert(sim::landmarkOfTrack(f.id, sc.world).id);
+  }
+  for (const auto& f : gone.features) ids_gone.insert(f.id);
+  int again = 0;
+  for (const auto& f : b.features) {
+    EXPECT_EQ(ids_a.count(f.id), 0u) << "a track that ended was continued";
+    EXPECT_EQ(ids_gone.count(f.id), 0u);
+    again += static_cast<int>(landmarks_a.count(sim::landmarkOfTrack(f.id, sc.world).id));
+    // The id maps back to the landmark that was projected.
+    const auto exact = sim::visibleLandmarks(looking, sc.world, sc.camera, sc.T_b_c, sc.cam);
+    const auto it = std::find_if(exact.begin(), exact.end(), [&](const FeatureObservation& e) {
+      return e.id == sim::landmarkOfTrack(f.id, sc.world).id;
+    });
+    ASSERT_NE(it, exact.end());
+    EXPECT_LT((it->uv - f.uv).norm(), 6.0);  // 1 px noise
+  }
+  EXPECT_GT(again, 20);  // the same landmarks are found again, under new ids
 }

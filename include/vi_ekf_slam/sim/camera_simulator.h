@@ -1,8 +1,10 @@
 // Simulated feature observations: projections of the visible landmarks with Gaussian pixel
-// noise; ids are kept, so the estimator gets data association from the simulator.
+// noise. Data association is perfect along a track; a landmark tracked again after its track
+// ended gets a new track id, as a KLT tracker gives a corner it finds again a new id.
 #pragma once
 
 #include <random>
+#include <unordered_map>
 
 #include "vi_ekf_slam/core/measurement_model.h"
 #include "vi_ekf_slam/core/types.h"
@@ -31,21 +33,37 @@ std::vector<FeatureObservation> visibleLandmarks(const TrajectorySample& sample,
                                                  const CameraModel& camera, const CameraExtrinsics& T_b_c,
                                                  const CameraSimParams& params);
 
+/// The id of the k-th track (k = 0, 1, ...) of the landmark with index `landmark` in a world of
+/// `world_size` landmarks: the landmark's own id the first time, landmark + k * world_size after,
+/// so a track's landmark is found again without a table (landmarkOfTrack).
+std::int64_t trackId(std::int64_t landmark, std::int64_t k, size_t world_size);
+/// The world landmark a track id of trackId() belongs to.
+const WorldLandmark& landmarkOfTrack(std::int64_t track_id, const LandmarkWorld& world);
+
 /// A simulated front end: keeps following its tracks while they stay visible and starts new ones
-/// in the emptiest grid cells up to max_features, then adds pixel noise. Deterministic for a
-/// given trajectory and random generator.
+/// in the emptiest grid cells up to max_features, then adds pixel noise. A track that ends is
+/// never continued: if its landmark is picked again, that is a new track with a new id (trackId),
+/// so the estimator cannot re-identify a point that left the view, as with a real KLT front end.
+/// Deterministic for a given trajectory and random generator.
 class TrackingCamera {
  public:
   TrackingCamera(const LandmarkWorld& world, const CameraModel& camera, const CameraExtrinsics& T_b_c,
                  const CameraSimParams& params);
+  /// The features of the frame taken at `sample`; FeatureObservation::id is the track id.
   CameraFrame observe(const TrajectorySample& sample, std::mt19937_64* rng);
 
  private:
+  struct Track {
+    std::int64_t landmark;  ///< index into the world
+    std::int64_t id;        ///< the track id the estimator sees
+  };
   const LandmarkWorld& world_;
   CameraModel camera_;
   CameraExtrinsics T_b_c_;
   CameraSimParams params_;
-  std::vector<std::int64_t> tracked_;
+  std::unordered_map<std::int64_t, size_t> index_of_;  ///< world id -> index in the world
+  std::vector<Track> tracked_;
+  std::unordered_map<std::int64_t, std::int64_t> tracks_started_;  ///< per landmark index
 };
 
 }  // namespace vi_ekf_slam::sim
