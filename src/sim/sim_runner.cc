@@ -148,10 +148,17 @@ SimRun runSimulation(const Scenario& sc, const EkfSlamConfig& config, const NavS
     }
     while (frameTime(next_frame) <= imu.samples[k].timestamp + 1e-12 && frameTime(next_frame) <= last_frame_time) {
       const double t = frameTime(next_frame++);
-      CameraFrame frame = camera.observe(traj.sample(t), &rng);
-      frame.timestamp = t - sc.cam.time_offset_s;
+      // A dropped image never reaches the tracker, which goes on from the last image it got; a
+      // covered lens shows it nothing to follow, so every track ends there (the points it finds
+      // after are new tracks, as a KLT tracker's are).
       if (activeFault(sc.faults, SensorFault::Kind::kImageDropout, t)) continue;
-      if (activeFault(sc.faults, SensorFault::Kind::kCameraCovered, t)) frame.features.clear();
+      CameraFrame frame;
+      if (activeFault(sc.faults, SensorFault::Kind::kCameraCovered, t)) {
+        camera.loseTracks();
+      } else {
+        frame = camera.observe(traj.sample(t), &rng);
+      }
+      frame.timestamp = t - sc.cam.time_offset_s;
       if (const SensorFault* f = activeFault(sc.faults, SensorFault::Kind::kOutlierBurst, t)) {
         corruptFeatures(frame, f->outlier_fraction, rng);
       }

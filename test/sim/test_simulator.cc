@@ -315,3 +315,18 @@ TEST(Simulator, ALandmarkTrackedAgainGetsANewTrackIdThatMapsBackToIt) {
   }
   EXPECT_GT(again, 20);  // the same landmarks are found again, under new ids
 }
+
+// A covered lens: the tracker has nothing to follow, so no track goes on after it.
+TEST(Simulator, LosingTheTracksStartsNewOnesWithNewIds) {
+  const sim::Scenario sc = sim::hallwayScenario(sim::HallwayParams(), 1.0, 5);
+  sim::TrackingCamera cam(sc.world, sc.camera, sc.T_b_c, sc.cam);
+  std::mt19937_64 rng(7);
+  const sim::TrajectorySample s = sc.trajectory->sample(5.0);
+  const CameraFrame before = cam.observe(s, &rng);
+  cam.loseTracks();
+  const CameraFrame after = cam.observe(s, &rng);
+  ASSERT_EQ(static_cast<int>(after.features.size()), sc.cam.max_features);
+  for (const auto& f : after.features) {
+    for (const auto& g : before.features) EXPECT_NE(f.id, g.id);
+  }
+}

@@ -51,6 +51,8 @@ class TrackingCamera {
                  const CameraSimParams& params);
   /// The features of the frame taken at `sample`; FeatureObservation::id is the track id.
   CameraFrame observe(const TrajectorySample& sample, std::mt19937_64* rng);
+  /// Ends every track (an image with nothing to follow, e.g. a covered lens).
+  void loseTracks() { tracked_.clear(); }
 
  private:
   struct Track {
