@@ -300,13 +300,13 @@ TEST(Simulator, ALandmarkTrackedAgainGetsANewTrackIdThatMapsBackToIt) {
     landmarks_a.insert(sim::landmarkOfTrack(f.id, sc.world).id);
   }
   for (const auto& f : gone.features) ids_gone.insert(f.id);
+  const auto exact = sim::visibleLandmarks(looking, sc.world, sc.camera, sc.T_b_c, sc.cam);
   int again = 0;
   for (const auto& f : b.features) {
     EXPECT_EQ(ids_a.count(f.id), 0u) << "a track that ended was continued";
     EXPECT_EQ(ids_gone.count(f.id), 0u);
     again += static_cast<int>(landmarks_a.count(sim::landmarkOfTrack(f.id, sc.world).id));
     // The id maps back to the landmark that was projected.
-    const auto exact = sim::visibleLandmarks(looking, sc.world, sc.camera, sc.T_b_c, sc.cam);
     const auto it = std::find_if(exact.begin(), exact.end(), [&](const FeatureObservation& e) {
       return e.id == sim::landmarkOfTrack(f.id, sc.world).id;
     });

@@ -34,8 +34,9 @@ std::vector<FeatureObservation> visibleLandmarks(const TrajectorySample& sample,
                                                  const CameraSimParams& params);
 
 /// The id of the k-th track (k = 0, 1, ...) of the landmark with index `landmark` in a world of
-/// `world_size` landmarks: the landmark's own id the first time, landmark + k * world_size after,
-/// so a track's landmark is found again without a table (landmarkOfTrack).
+/// `world_size` landmarks: the landmark's index the first time (its id too, in the worlds built
+/// here), landmark + k * world_size after, so a track's landmark is found again without a table
+/// (landmarkOfTrack).
 std::int64_t trackId(std::int64_t landmark, std::int64_t k, size_t world_size);
 /// The world landmark a track id of trackId() belongs to.
 const WorldLandmark& landmarkOfTrack(std::int64_t track_id, const LandmarkWorld& world);
