@@ -17,11 +17,13 @@ namespace vi_ekf_slam {
 std::string DynamicInitParams::validate() const {
   std::ostringstream err;
   if (!(window_s > 0.1 && window_s <= 10.0)) err << "dynamic init window_s [s] must be in (0.1, 10]\n";
+  if (!(max_window_s <= 10.0)) err << "dynamic init max_window_s [s] must be <= 10\n";
   if (min_frames < 3) err << "dynamic init min_frames must be >= 3\n";
   if (min_observations < 3) err << "dynamic init min_observations must be >= 3\n";
   if (min_features < 6) err << "dynamic init min_features must be >= 6\n";
   if (!(max_velocity_sigma_mps > 0.0)) err << "dynamic init max_velocity_sigma_mps [m/s] must be > 0\n";
   if (!(max_tilt_sigma_rad > 0.0)) err << "dynamic init max_tilt_sigma_rad [rad] must be > 0\n";
+  if (!(max_scale_sigma > 0.0)) err << "dynamic init max_scale_sigma [ratio] must be > 0\n";
   if (!(gyro_bias_sigma_radps > 0.0)) err << "dynamic init gyro_bias_sigma_radps [rad/s] must be > 0\n";
   if (!(accel_bias_sigma_mps2 >= 0.0)) err << "dynamic init accel_bias_sigma_mps2 [m/s^2] must be >= 0\n";
   if (!(pixel_noise_px > 0.0)) err << "dynamic init pixel_noise_px [px] must be > 0\n";
@@ -51,7 +53,7 @@ void DynamicInitializer::addImu(const ImuData& imu) {
   if (!imu_.empty() && imu.timestamp <= imu_.back().timestamp) return;
   imu_.push_back(imu);
   // Keep what the window can need (frames wait for the IMU to pass them).
-  const double keep_from = imu.timestamp - params_.window_s - 1.0;
+  const double keep_from = imu.timestamp - std::max(params_.window_s, params_.max_window_s) - 1.0;
   while (imu_.size() > 2 && imu_[1].timestamp < keep_from) imu_.pop_front();
 }
 
@@ -59,7 +61,8 @@ void DynamicInitializer::addFrame(const CameraFrame& frame) {
   if (!std::isfinite(frame.timestamp)) return;
   if (!frames_.empty() && frame.timestamp <= frames_.back().timestamp) return;
   frames_.push_back(frame);
-  while (!frames_.empty() && frames_.front().timestamp < frame.timestamp - params_.window_s - 1.0) frames_.pop_front();
+  const double keep_s = std::max(params_.window_s, params_.max_window_s) + 1.0;
+  while (!frames_.empty() && frames_.front().timestamp < frame.timestamp - keep_s) frames_.pop_front();
 }
 
 namespace {
@@ -130,18 +133,46 @@ struct Obs {
 }  // namespace
 
 std::optional<DynamicInitResult> DynamicInitializer::tryInitialize(std::string* why) {
+  std::string first_why;
+  std::optional<DynamicInitResult> r = alignSpan(params_.window_s, &first_why);
+  if (!r && first_why.rfind("degenerate motion", 0) == 0 && params_.max_window_s > params_.window_s) {
+    // Too little motion in the window: the frames before it may hold the acceleration it lacks.
+    // The span of the frames the IMU covers (as alignSpan selects them):
+    const double search = params_.time_offset_search_s;
+    double last = std::numeric_limits<double>::quiet_NaN(), first = last;
+    for (auto it = frames_.rbegin(); it != frames_.rend(); ++it) {
+      if (it->timestamp + search > imu_.back().timestamp) continue;
+      if (it->timestamp - search < imu_.front().timestamp) break;
+      if (std::isnan(last)) last = it->timestamp;
+      first = it->timestamp;
+    }
+    const double span = std::min(params_.max_window_s, last - first);
+    if (span > 1.1 * params_.window_s) {
+      std::string longer_why;
+      r = alignSpan(span, &longer_why);
+      std::ostringstream w;
+      w.precision(3);
+      w << first_why << "; over " << span << " s: " << longer_why;
+      if (!r) first_why = w.str();
+    }
+  }
+  if (why) *why = r ? std::string() : first_why;
+  return r;
+}
+
+std::optional<DynamicInitResult> DynamicInitializer::alignSpan(double span_s, std::string* why) {
   auto fail = [&](const std::string& w) -> std::optional<DynamicInitResult> {
     if (why) *why = w;
     return std::nullopt;
   };
   if (imu_.size() < 2 || frames_.empty()) return fail("waiting for IMU and images");
-  // Frames the IMU covers, in the last window_s.
+  // Frames the IMU covers, in the last span_s.
   std::vector<const CameraFrame*> window;
   const double search = params_.time_offset_search_s;
   for (auto it = frames_.rbegin(); it != frames_.rend(); ++it) {
     if (it->timestamp + search > imu_.back().timestamp) continue;
     if (it->timestamp - search < imu_.front().timestamp) break;
-    if (!window.empty() && window.back()->timestamp - it->timestamp > params_.window_s) break;
+    if (!window.empty() && window.back()->timestamp - it->timestamp > span_s) break;
     window.insert(window.begin(), &*it);
   }
   if (static_cast<int>(window.size()) < params_.min_frames) {
@@ -150,9 +181,9 @@ std::optional<DynamicInitResult> DynamicInitializer::tryInitialize(std::string* 
   }
   // A short span aligns poorly (velocity and gravity come from the curvature of the path): the
   // images must span the window (within 10%).
-  if (window.back()->timestamp - window.front()->timestamp < 0.9 * params_.window_s) {
+  if (window.back()->timestamp - window.front()->timestamp < 0.9 * span_s) {
     return fail("collecting images (" + std::to_string(window.back()->timestamp - window.front()->timestamp) +
-                " s of " + std::to_string(params_.window_s) + " s)");
+                " s of " + std::to_string(span_s) + " s)");
   }
   std::vector<double> stamps, times;
   for (const auto* f : window) stamps.push_back(f->timestamp);
@@ -758,6 +789,20 @@ std::optional<DynamicInitResult> DynamicInitializer::tryInitialize(std::string* 
     // The scene's depth from the features whose depth the window determined (to 50%): without
     // parallax (a rig at rest) the depths are arbitrary.
     if (l.inverse_depth_sigma * l.depth_m < 0.5) last_depths.push_back(l.depth_m);
+  }
+  // The scale of the scene: the mean inverse depth of the last frame's features, whose error is
+  // mostly the error they share (their own errors average out). A velocity known to 0.07 m/s is a
+  // good start for a walk at 1.3 m/s and no start for a hand moving at 0.1 m/s: the velocity's
+  // sigma is absolute, the scale's relative, and what a monocular start cannot do without.
+  if (n == 0) return fail("no feature of the last image placed: nothing to give the scale");
+  double mean_rho = 0.0;
+  for (const DynamicInitLandmark& l : r.landmarks) mean_rho += 1.0 / l.depth_m;
+  mean_rho /= n;
+  r.scale_sigma = std::sqrt(std::max(0.0, r.landmark_covariance.sum())) / n / mean_rho;
+  if (!(r.scale_sigma <= params_.max_scale_sigma)) {
+    quality << "degenerate motion: the scene's scale known to " << 100.0 * r.scale_sigma << "% only (more than "
+            << 100.0 * params_.max_scale_sigma << "%): too little acceleration for its depth";
+    return fail(quality.str());
   }
   if (last_depths.size() >= 3) {
     std::nth_element(last_depths.begin(), last_depths.begin() + static_cast<std::ptrdiff_t>(last_depths.size() / 2),

@@ -47,8 +47,9 @@ std::optional<std::string> FilterStart::tryDynamic(EkfSlam& filter, const Camera
   e.precision(3);
   e << "initialized: dynamic, " << (image_t - *first_image_t_) << " s after the first image (" << r->frames
     << " images, " << r->features << " features, " << added << " landmarks, median depth " << r->median_depth_m
-    << " m, velocity sigma " << r->velocity_sigma_mps << " m/s, roll/pitch sigma " << r->tilt_sigma_rad
-    << " rad, time offset " << params_.filter.camera_time_offset_s + r->time_offset_correction_s << " s)";
+    << " m, scale sigma " << 100.0 * r->scale_sigma << "%, velocity sigma " << r->velocity_sigma_mps
+    << " m/s, roll/pitch sigma " << r->tilt_sigma_rad << " rad, time offset "
+    << params_.filter.camera_time_offset_s + r->time_offset_correction_s << " s)";
   ROS_INFO_STREAM("vi_ekf_slam: " << e.str());
   first_image_t_.reset();
   static_result_.reset();

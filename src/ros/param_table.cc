@@ -217,8 +217,16 @@ std::vector<ParamSpec> makeTable() {
             "also initialize while moving (visual-inertial alignment of a window of tracks and IMU)"),
       field("dynamic_init_window_s", "initialization", VI_FIELD(p.dynamic_init.window_s), "s",
             "window of images it aligns", false, 0.2, 10.0),
+      field("dynamic_init_max_window_s", "initialization", VI_FIELD(p.dynamic_init.max_window_s), "s",
+            "when that window's motion is too little, the images of up to this long are aligned (the acceleration "
+            "it lacked may be in the frames before it)",
+            false, 0.2, 10.0),
       field("dynamic_init_max_velocity_sigma_mps", "initialization", VI_FIELD(p.dynamic_init.max_velocity_sigma_mps),
             "m/s", "waits while the velocity would be known worse than this (too little motion)", false, 0.001, 10.0),
+      field("dynamic_init_max_scale_sigma", "initialization", VI_FIELD(p.dynamic_init.max_scale_sigma), "ratio",
+            "waits while the scene's scale (mean inverse depth of the last image's features) would be known worse "
+            "than this fraction (too little acceleration for the depth)",
+            false, 0.01, 10.0),
       field("dynamic_init_max_tilt_sigma_rad", "initialization", VI_FIELD(p.dynamic_init.max_tilt_sigma_rad), "rad",
             "waits while roll/pitch would be known worse than this", false, 0.001, 1.0),
       field("dynamic_init_gyro_bias_sigma_radps", "initialization", VI_FIELD(p.dynamic_init.gyro_bias_sigma_radps),

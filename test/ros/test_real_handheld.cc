@@ -163,7 +163,10 @@ TEST(RealHandheld, First15SecondsTrackWithTheRigFile) {
 // Started mid-walk (the node, a bag played with --start, a reset while walking): no rest to
 // initialize from, so the dynamic initializer must; then it tracks as from the start. The run from
 // the start is measured here too, over the same seconds (its poses from the cut run's first one to
-// its end, aligned on their own), so the ratio the issue asks for is what the test prints.
+// its end, aligned on their own), so the ratio the issue asks for is what the test prints. The
+// issue names the cuts at 10 s and 30 s; one cut is one sample of where a hand happens to be slow
+// or a reference happens to be exact, so every 2.5 s from 5 s to 30 s is measured, and their
+// geometric mean held to the issue's 1.5x.
 TEST(RealHandheld, StartedMidWalkInitializesWhileMoving) {
   const auto whole = runSegment(0.0, 46.0, "");
   if (!whole) GTEST_SKIP() << "no dmvio_handheld in DATA_DIR";
@@ -171,31 +174,38 @@ TEST(RealHandheld, StartedMidWalkInitializesWhileMoving) {
   const auto sfm =
       eval::readTum(std::string(std::getenv("DATA_DIR")) + "/dmvio_handheld/reference/sfm_camera_poses.txt");
   const auto whole_view = eval::referenceView(whole->sink.poses, cam.T_b_c, &whole->sink.time_offsets);
-  // Bounds: from 10 s, 1.5x the run from the start (the issue's target); from 30 s it is not met
-  // (docs/initialization.md), the bound is 30% above what was measured (2.68x: 0.012 m against
-  // 0.004 m; it was 0.011 against 0.007 before new tracks waited on clones while held back).
-  for (const auto& [start, max_ratio] : {std::pair{10.0, 1.5}, std::pair{30.0, 3.5}}) {
+  double log_ratio_sum = 0.0;
+  int cuts = 0;
+  for (double start = 5.0; start <= 30.0 + 1e-9; start += 2.5) {
     const auto r = runSegment(start, 15.0, "");
     ASSERT_TRUE(r);
     ASSERT_FALSE(r->sink.poses.empty());
     ASSERT_FALSE(r->sink.events.empty());
     EXPECT_EQ(r->sink.events.front().rfind("initialized: dynamic", 0), 0u) << r->sink.events.front();
     const double first_odom_after_s = r->sink.poses.front().t - r->first_image_t;
-    std::printf("started %.0f s in: first odometry %.2f s after the first image; %s\n", start, first_odom_after_s,
+    std::printf("started %.1f s in: first odometry %.2f s after the first image; %s\n", start, first_odom_after_s,
                 r->sink.events.front().c_str());
     EXPECT_LT(first_odom_after_s, 2.0);
-    expectTracked(*r, start < 20.0 ? "from 10 s" : "from 30 s");
+    expectTracked(*r, "cut");
     std::vector<eval::StampedPose> same_seconds;
     for (const auto& p : whole_view)
       if (p.t >= r->sfm.t.front() && p.t <= r->sfm.t.back()) same_seconds.push_back(p);
     const auto from_start = eval::compareWithReference(same_seconds, sfm, eval::Alignment::kSim3);
     const double ratio = r->sfm.position_rmse_m / from_start.position_rmse_m;
     std::printf(
-        "started %.0f s in: RMSE %.3f m against %.3f m for the run from the start over the same %d poses: "
+        "started %.1f s in: RMSE %.4f m against %.4f m for the run from the start over the same %d poses: "
         "%.2fx\n",
         start, r->sfm.position_rmse_m, from_start.position_rmse_m, from_start.matched, ratio);
-    EXPECT_LT(ratio, max_ratio);
+    // Bounds: from 10 s, 1.5x the run from the start (the issue's target); every cut (the 30 s
+    // one is 2.68x: 0.012 m against 0.0045 m, the run from the start's best seconds) 30% above the
+    // worst measured (docs/initialization.md).
+    EXPECT_LT(ratio, start == 10.0 ? 1.5 : 3.5) << "started " << start << " s in";
+    log_ratio_sum += std::log(ratio);
+    ++cuts;
   }
+  const double geometric_mean = std::exp(log_ratio_sum / cuts);
+  std::printf("%d cuts: geometric mean of the ratios %.2f\n", cuts, geometric_mean);
+  EXPECT_LT(geometric_mean, 1.5);
 }
 
 }  // namespace vi_ekf_slam::glue

@@ -29,7 +29,10 @@
 namespace vi_ekf_slam {
 
 struct DynamicInitParams {
-  double window_s = 1.0;     ///< span of the frames used [s]
+  double window_s = 1.0;  ///< span of the frames used [s]
+  /// When that window's motion is too little (degenerate), the frames of up to this span are
+  /// aligned once they span 10% more [s] (no longer window when <= window_s)
+  double max_window_s = 2.0;
   int min_frames = 6;        ///< frames in the window [count]
   int min_features = 12;     ///< features seen in >= min_observations frames [count]
   int min_observations = 4;  ///< frames a feature must be seen in to be used [count]
@@ -37,7 +40,11 @@ struct DynamicInitParams {
   /// in place, constant velocity) whose linearized covariance is not to be trusted. A start with
   /// an honest 0.2-0.3 m/s is consistent and the filter sharpens it within seconds.
   double max_velocity_sigma_mps = 0.3;
-  double max_tilt_sigma_rad = 0.035;    ///< refuse when roll/pitch is known worse than this [rad]
+  double max_tilt_sigma_rad = 0.035;  ///< refuse when roll/pitch is known worse than this [rad]
+  /// Refuse when the scene's scale (the mean inverse depth of the last frame's features, with the
+  /// error they share) is known worse than this fraction of itself [ratio]: a slow motion (a hand
+  /// at 0.1 m/s) whose velocity sigma passes the absolute bound but leaves the depths unknown.
+  double max_scale_sigma = 0.5;
   double gyro_bias_sigma_radps = 0.01;  ///< initial std-dev of the (unknown) gyro bias [rad/s]
   /// std-dev of the (unknown) accelerometer bias [m/s^2]; set from the filter's prior
   double accel_bias_sigma_mps2 = 0.05;
@@ -89,6 +96,8 @@ struct DynamicInitResult {
   /// of the features in the last frame whose depth it knows to 50%; 0 (unknown) with fewer than 3
   double median_depth_m = 0.0;
   double residual_rms_px = 0.0;  ///< of the alignment
+  /// relative std-dev of the mean inverse depth of `landmarks` (the scene's scale) [ratio]
+  double scale_sigma = 0.0;
   std::vector<DynamicInitLandmark> landmarks;
   /// The landmarks' inverse depths are not known independently: one error of the window's
   /// velocity, gravity and bias (its scale) moves every depth and the velocity together. Their
@@ -111,13 +120,16 @@ class DynamicInitializer {
   void addImu(const ImuData& imu);
   /// A frame of tracks on the IMU clock (its stamp + the camera-IMU time offset).
   void addFrame(const CameraFrame& frame);
-  /// Tries the alignment on the frames of the last window_s that the IMU covers. On failure
-  /// returns nothing and sets *why (what is missing or degenerate).
+  /// Tries the alignment on the frames of the last window_s that the IMU covers, and if their
+  /// motion is degenerate, on those of up to max_window_s. On failure returns nothing and sets
+  /// *why (what is missing or degenerate).
   std::optional<DynamicInitResult> tryInitialize(std::string* why);
   void reset();
   const DynamicInitParams& params() const { return params_; }
 
  private:
+  std::optional<DynamicInitResult> alignSpan(double span_s, std::string* why);
+
   DynamicInitParams params_;
   CameraModel camera_;
   CameraExtrinsics T_b_c_;
