@@ -25,6 +25,7 @@ from suite import fmt
 
 TRAJECTORIES = [("builtin", "builtin"), ("tum_corridor", "trajectories/tum_corridor1_512_16_okvis.txt"),
                 ("euroc_V1_01", "trajectories/euroc_V1_01_easy.txt")]
+MIN_FRACTION_WITHIN = 0.95  # of the runs initialized within INIT_WITHIN_S (issue 16)
 INIT_WITHIN_S = 1.5
 
 
@@ -89,6 +90,11 @@ def main():
             fmt(r["init_delay_max_s"], 2), fmt(r["nees_pose_first_10s"], 2), "" if nees_ok else " (!)",
             r["nees_band"][0], r["nees_band"][1], fmt(r["ate_posyaw_m"]), fmt(r["truth_ate_posyaw_m"]),
             fmt(ratio, 2), fmt(r["ate_m"]), fmt(r["truth_ate_m"]), fmt(r["prior_ate_posyaw_m"])))
+    within, runs = sum(r["initialized_within_1_5_s"] for r in rows), sum(r["runs"] for r in rows)
+    if runs:
+        lines += ["", "All trajectories: %d/%d runs initialized within %g s (%.1f%%; at least %g%% asked)%s" % (
+            within, runs, INIT_WITHIN_S, 100.0 * within / runs, 100.0 * MIN_FRACTION_WITHIN,
+            "" if within >= MIN_FRACTION_WITHIN * runs else " (!)")]
     text = "\n".join(lines) + "\n"
     with open(os.path.join(a.out, "init_suite.md"), "w") as f:
         f.write(text)
