@@ -17,6 +17,8 @@ import tempfile
 import time
 import unittest
 
+import rosbag
+import rosgraph
 import rospy
 import rostest
 from geometry_msgs.msg import PoseStamped
@@ -69,9 +71,28 @@ class ReplayCheck(unittest.TestCase):
         tmp = tempfile.mkdtemp()
         bag = os.path.join(tmp, "input.bag")
         self.make_bag(source, bag)
-        time.sleep(1.0)  # connections
-        subprocess.run(["rosbag", "play", "--clock", "--quiet", bag], check=True)
-        time.sleep(1.0)
+        # The first messages must reach the node whatever the machine's load (a publish before the
+        # node's connection is lost, and a later start is a different run): wait until the node has
+        # subscribed to the bag's IMU and images, then let rosbag play wait for a connection on
+        # every topic it plays (those someone subscribes to).
+        with rosbag.Bag(bag) as b:
+            topics = b.get_type_and_topic_info().topics
+            images = [t for t, info in topics.items() if info.msg_type == "sensor_msgs/Image"]
+            last_image_t = max(m.header.stamp.to_sec() for _, m, _ in b.read_messages(topics=images))
+        sensors = {t for t, info in topics.items() if info.msg_type in ("sensor_msgs/Imu", "sensor_msgs/Image")}
+        master = rosgraph.Master(rospy.get_name())
+        while True:
+            subscribed = {t for t, _ in master.getSystemState()[1]}
+            if sensors <= subscribed:
+                break
+            time.sleep(0.1)
+        play = sorted(t for t in topics if t in subscribed)
+        subprocess.run(["rosbag", "play", "--clock", "--quiet", "--wait-for-subscribers", bag, "--topics"] + play,
+                       check=True)
+        # The node may lag behind the bag on a busy machine: wait for the status of its last images
+        # (stamped on the IMU clock: within the 0.1 s any time offset estimate stays in).
+        while not any(st.header.stamp.to_sec() >= last_image_t - 0.1 for st in self.status[-5:]):
+            time.sleep(0.05)
         self.assertGreater(len(self.odom), 20, "no odometry from the replay")
         for o in self.odom:
             p = o.pose.pose.position
