@@ -132,28 +132,35 @@ struct Obs {
 
 }  // namespace
 
+std::vector<const CameraFrame*> DynamicInitializer::coveredFrames(double span_s) const {
+  std::vector<const CameraFrame*> window;
+  if (imu_.size() < 2) return window;
+  const double search = params_.time_offset_search_s;
+  for (auto it = frames_.rbegin(); it != frames_.rend(); ++it) {
+    if (it->timestamp + search > imu_.back().timestamp) continue;
+    if (it->timestamp - search < imu_.front().timestamp) break;
+    if (!window.empty() && window.back()->timestamp - it->timestamp > span_s) break;
+    window.insert(window.begin(), &*it);
+  }
+  return window;
+}
+
 std::optional<DynamicInitResult> DynamicInitializer::tryInitialize(std::string* why) {
   std::string first_why;
   std::optional<DynamicInitResult> r = alignSpan(params_.window_s, &first_why);
   if (!r && first_why.rfind("degenerate motion", 0) == 0 && params_.max_window_s > params_.window_s) {
     // Too little motion in the window: the frames before it may hold the acceleration it lacks.
-    // The span of the frames the IMU covers (as alignSpan selects them):
-    const double search = params_.time_offset_search_s;
-    double last = std::numeric_limits<double>::quiet_NaN(), first = last;
-    for (auto it = frames_.rbegin(); it != frames_.rend(); ++it) {
-      if (it->timestamp + search > imu_.back().timestamp) continue;
-      if (it->timestamp - search < imu_.front().timestamp) break;
-      if (std::isnan(last)) last = it->timestamp;
-      first = it->timestamp;
-    }
-    const double span = std::min(params_.max_window_s, last - first);
+    const std::vector<const CameraFrame*> longer = coveredFrames(params_.max_window_s);
+    const double span = longer.empty() ? 0.0 : longer.back()->timestamp - longer.front()->timestamp;
     if (span > 1.1 * params_.window_s) {
       std::string longer_why;
       r = alignSpan(span, &longer_why);
-      std::ostringstream w;
-      w.precision(3);
-      w << first_why << "; over " << span << " s: " << longer_why;
-      if (!r) first_why = w.str();
+      if (!r) {
+        std::ostringstream w;
+        w.precision(3);
+        w << first_why << "; over " << span << " s: " << longer_why;
+        first_why = w.str();
+      }
     }
   }
   if (why) *why = r ? std::string() : first_why;
@@ -166,15 +173,8 @@ std::optional<DynamicInitResult> DynamicInitializer::alignSpan(double span_s, st
     return std::nullopt;
   };
   if (imu_.size() < 2 || frames_.empty()) return fail("waiting for IMU and images");
-  // Frames the IMU covers, in the last span_s.
-  std::vector<const CameraFrame*> window;
+  const std::vector<const CameraFrame*> window = coveredFrames(span_s);
   const double search = params_.time_offset_search_s;
-  for (auto it = frames_.rbegin(); it != frames_.rend(); ++it) {
-    if (it->timestamp + search > imu_.back().timestamp) continue;
-    if (it->timestamp - search < imu_.front().timestamp) break;
-    if (!window.empty() && window.back()->timestamp - it->timestamp > span_s) break;
-    window.insert(window.begin(), &*it);
-  }
   if (static_cast<int>(window.size()) < params_.min_frames) {
     return fail("collecting images (" + std::to_string(window.size()) + " of " + std::to_string(params_.min_frames) +
                 ")");

@@ -128,6 +128,9 @@ class DynamicInitializer {
   const DynamicInitParams& params() const { return params_; }
 
  private:
+  /// The frames the IMU covers (with the time offset search's margin at both ends), the last
+  /// span_s of them, oldest first.
+  std::vector<const CameraFrame*> coveredFrames(double span_s) const;
   std::optional<DynamicInitResult> alignSpan(double span_s, std::string* why);
 
   DynamicInitParams params_;
