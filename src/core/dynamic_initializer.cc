@@ -246,12 +246,16 @@ std::optional<DynamicInitResult> DynamicInitializer::alignSpan(double span_s, st
   auto cameraPoint = [&](int k, const Vec3& pf, const VecY& yy) {
     return cameraPointWith(pre[static_cast<size_t>(k)], times[static_cast<size_t>(k)] - times.front(), pf, yy);
   };
-  // The alignment with the frames shifted by dt on the IMU clock; returns the reprojection error
-  // sum [px^2], or infinity when it has no solution or puts a feature behind the camera.
-  auto solve = [&](double dt) {
+  // The frames shifted by dt on the IMU clock, and the IMU integrated to them.
+  auto setTimes = [&](double dt) {
     times = stamps;
     for (auto& t : times) t += dt;
     pre = preintegrate(imu_, times);
+  };
+  // The linear alignment with the frames shifted by dt; returns the reprojection error sum
+  // [px^2], or infinity when it has no solution.
+  auto solve = [&](double dt) {
+    setTimes(dt);
     for (int pass = 0; pass < 2; ++pass) {
       MatY Hyy = MatY::Zero();
       VecY by = VecY::Zero();
@@ -410,20 +414,8 @@ std::optional<DynamicInitResult> DynamicInitializer::alignSpan(double span_s, st
       k += active[static_cast<size_t>(j)] ? static_cast<int>(used[static_cast<size_t>(j)]->size()) : 0;
     return k;
   };
-  auto refine = [&](double dt, bool choose_active = false) {
-    if (!std::isfinite(solve(dt))) return std::numeric_limits<double>::infinity();
-    if (choose_active) {
-      num_active = 0;
-      for (int j = 0; j < M; ++j) {
-        bool in_front = true;
-        for (const Obs& o : *used[static_cast<size_t>(j)]) {
-          in_front = in_front && cameraPoint(o.frame, p_f[j], y).z() > 0.05;
-        }
-        active[static_cast<size_t>(j)] = in_front;
-        num_active += in_front;
-      }
-    }
-    if (num_active < params_.min_features) return std::numeric_limits<double>::infinity();
+  // Levenberg-Marquardt on the active features from the current y and p_f; returns the cost.
+  auto levenbergMarquardt = [&]() {
     double cost = reprojectionCost(y, p_f, huber_px), lambda = 1e-4;
     for (int it = 0; it < 20 && std::isfinite(cost); ++it) {
       MatY Hyy;
@@ -476,6 +468,108 @@ std::optional<DynamicInitResult> DynamicInitializer::alignSpan(double span_s, st
       }
       if (!accepted) break;
     }
+    return cost;
+  };
+  // Whether the window's parallax gives feature j's inverse depth rho = 1 / z (in its last camera)
+  // to 50% at pf for the current y: a point the window cannot tell from one at infinity says
+  // nothing of y, and its position (x, y, z) is then far from linear in the observations. The
+  // information is taken along its ray from the last camera (pf = c_K + m / rho), finite for a point
+  // the refinement has pushed far out, where the Cartesian normal equations are singular.
+  auto depthDetermined = [&](int j, const Vec3& pf) {
+    const std::vector<Obs>& obs = *used[static_cast<size_t>(j)];
+    const int k = obs.back().frame;
+    const Mat3 R_cK = R_c_b * pre[static_cast<size_t>(k)].R.transpose();
+    const Vec3 pc_K = cameraPoint(k, pf, y);
+    const double z = pc_K.z();
+    if (!(z > 0.05)) return false;
+    const double rho = 1.0 / z;
+    const Vec3 dpf_drho = -R_cK.transpose() * (pc_K / z) / (rho * rho);
+    double info = 0.0;
+    for (const Obs& o : obs) {
+      const Vec3 pc = cameraPoint(o.frame, pf, y);
+      const Mat3 R_ck = R_c_b * pre[static_cast<size_t>(o.frame)].R.transpose();
+      const Vec3 d = R_ck * dpf_drho;
+      info += (Eigen::Vector2d(d.x() - pc.x() / pc.z() * d.z(), d.y() - pc.y() / pc.z() * d.z()) / pc.z()).squaredNorm();
+    }
+    const double sigma_rho = params_.pixel_noise_px / f_px / std::sqrt(std::max(info, 1e-300));
+    return sigma_rho < 0.5 * rho;
+  };
+  // Feature j placed for the current y alone (y fixed): the linear triangulation of its rays, then
+  // Gauss-Newton on its reprojection error; true if it is then in front of every camera and its
+  // depth determined (above).
+  auto placeFeature = [&](int j) {
+    const std::vector<Obs>& obs = *used[static_cast<size_t>(j)];
+    Mat3 H = Mat3::Zero();
+    Vec3 b = Vec3::Zero();
+    for (const Obs& o : obs) {
+      const double t = times[static_cast<size_t>(o.frame)] - times.front();
+      const Preintegrated& P = pre[static_cast<size_t>(o.frame)];
+      const Mat3 R_ck = R_c_b * P.R.transpose();
+      const Vec3 p_k = y.head<3>() * t + 0.5 * y.segment<3>(3) * t * t + P.alpha + P.A * y.tail<3>();
+      Eigen::Matrix<double, 2, 3> E;
+      E << 1.0, 0.0, -o.xn.x(), 0.0, 1.0, -o.xn.y();
+      const Eigen::Matrix<double, 2, 3> Af = E * R_ck;
+      H += Af.transpose() * Af;
+      b += Af.transpose() * (E * (R_ck * p_k - p_c_b));
+    }
+    Vec3 pf = (H + 1e-12 * Mat3::Identity()).ldlt().solve(b);
+    for (int it = 0; it < 5; ++it) {
+      Mat3 Hj = Mat3::Zero();
+      Vec3 bj = Vec3::Zero();
+      for (const Obs& o : obs) {
+        const Vec3 pc = cameraPoint(o.frame, pf, y);
+        if (!(pc.z() > 0.05)) return false;
+        const Mat3 R_ck = R_c_b * pre[static_cast<size_t>(o.frame)].R.transpose();
+        Eigen::Matrix<double, 2, 3> Jp;
+        Jp << 1.0 / pc.z(), 0.0, -pc.x() / (pc.z() * pc.z()), 0.0, 1.0 / pc.z(), -pc.y() / (pc.z() * pc.z());
+        const Eigen::Matrix<double, 2, 3> Jf = Jp * R_ck;
+        Hj += Jf.transpose() * Jf;
+        bj += Jf.transpose() * (pc.head<2>() / pc.z() - o.xn);
+      }
+      pf -= (Hj + 1e-12 * Mat3::Identity()).ldlt().solve(bj);
+    }
+    for (const Obs& o : obs) {
+      if (!(cameraPoint(o.frame, pf, y).z() > 0.05)) return false;
+    }
+    if (!depthDetermined(j, pf)) return false;
+    p_f[static_cast<size_t>(j)] = pf;
+    return true;
+  };
+  // The alignment at a time shift dt, refined; returns its (Huber) reprojection cost [px^2] plus
+  // the time offset's prior. choose_active: from the linear solution, with the features it puts
+  // in front of the camera; then every other feature placed for the refined y (the linear
+  // solution can be far enough off to put most of a window's features behind the camera, and a
+  // refinement on the few it kept only confirms it) and refined again, until none joins.
+  // Otherwise (costs at several dt compare on the same features): from the last refinement.
+  auto refine = [&](double dt, bool choose_active = false) {
+    if (choose_active) {
+      if (!std::isfinite(solve(dt))) return std::numeric_limits<double>::infinity();
+      num_active = 0;
+      for (int j = 0; j < M; ++j) {
+        bool in_front = true;
+        for (const Obs& o : *used[static_cast<size_t>(j)]) {
+          in_front = in_front && cameraPoint(o.frame, p_f[j], y).z() > 0.05;
+        }
+        active[static_cast<size_t>(j)] = in_front;
+        num_active += in_front;
+      }
+    } else {
+      setTimes(dt);
+    }
+    if (num_active < params_.min_features) return std::numeric_limits<double>::infinity();
+    double cost = levenbergMarquardt();
+    for (int round = 0; choose_active && std::isfinite(cost) && round < 3; ++round) {
+      int joined = 0;
+      for (int j = 0; j < M; ++j) {
+        if (!active[static_cast<size_t>(j)] && placeFeature(j)) {
+          active[static_cast<size_t>(j)] = 1;
+          ++joined;
+        }
+      }
+      if (joined == 0) break;
+      num_active += joined;
+      cost = levenbergMarquardt();
+    }
     return cost + timeOffsetPrior(dt);
   };
   // The camera-IMU time offset is part of the alignment: the best of the refined alignments on a
@@ -524,6 +618,23 @@ std::optional<DynamicInitResult> DynamicInitializer::alignSpan(double span_s, st
   if (search <= 0.0) refine(0.0, true);
   if (!std::isfinite(refine(best_dt))) {
     return fail("degenerate motion: the alignment has no solution with the features in front of the camera");
+  }
+  // A feature whose depth the refined window leaves undetermined (pushed far out along its ray)
+  // leaves the alignment: its Cartesian normal equations are singular and would make up a
+  // covariance for it and for y.
+  for (int round = 0;; ++round) {
+    int dropped = 0;
+    for (int j = 0; j < M; ++j) {
+      if (active[static_cast<size_t>(j)] && !depthDetermined(j, p_f[j])) {
+        active[static_cast<size_t>(j)] = 0;
+        --num_active;
+        ++dropped;
+      }
+    }
+    if (dropped == 0) break;
+    if (round == 4 || !std::isfinite(refine(best_dt))) {
+      return fail("degenerate motion: too few features whose depth the window determines");
+    }
   }
   {
     MatY Hyy;
