@@ -7,7 +7,9 @@
 #include <cmath>
 #include <functional>
 #include <map>
+#include <fstream>
 #include <random>
+#include <string>
 
 #include "vi_ekf_slam/core/dynamic_initializer.h"
 #include "vi_ekf_slam/core/imu_propagation.h"
@@ -42,6 +44,7 @@ struct Window {
   std::string why;
   sim::TrajectorySample truth;                ///< at the last frame
   std::map<std::int64_t, double> true_depth;  ///< of the features in the last frame
+  int tracked = 0;                             ///< features seen in min_observations frames or more
 };
 
 /// IMU at 1 kHz (exact) and noise-free frames at 20 Hz over [t0, t1] into the initializer.
@@ -72,13 +75,16 @@ Window runWindow(const sim::Trajectory& traj, const sim::LandmarkWorld& world, c
   }
   const int n_frames = static_cast<int>(std::round((t1 - t0) * 20.0));
   CameraFrame last;
+  std::map<std::int64_t, int> seen;
   for (int k = 0; k <= n_frames; ++k) {
     const double t = t0 + 0.05 * k;
     CameraFrame f = camera.observe(traj.sample(t), rng);
     f.timestamp = t - clock_error_s;
     init.addFrame(f);
+    for (const auto& o : f.features) ++seen[o.id];
     last = f;
   }
+  for (const auto& [id, count] : seen) w.tracked += count >= p.min_observations;
   w.truth = traj.sample(last.timestamp + clock_error_s);
   for (const auto& o : last.features) {
     const Vec3 p_b = w.truth.q_n_b.conjugate() * (sim::landmarkOfTrack(o.id, world).p_n - w.truth.p_n_b);
@@ -256,8 +262,50 @@ TEST(DynamicInit, AGyroBiasItDoesNotEstimateIsInItsJointCovariance) {
       "gyro bias considered: joint NEES of velocity, roll/pitch and inverse depths %.2f per dimension (%d "
       "windows, %d dimensions)\n",
       nees / dims, n, dims);
-  // As above: a linearization's covariance, chi^2(dims) / dims ~ 1. Measured 0.31: conservative,
+  // As above: a linearization's covariance, chi^2(dims) / dims ~ 1. Measured 0.48 (0.31 before the features the linear solution misplaced rejoined): conservative,
   // the former b_g T bound stays on top of the first-order share (docs/initialization.md).
+  EXPECT_LT(nees / dims, 1.5);
+}
+
+TEST(DynamicInit, FeaturesTheLinearSolutionPutsBehindTheCameraRejoinTheRefinement) {
+  // A stretch of the EuRoC V1_01 flight (turning at 0.4-0.6 rad/s, 0.4-0.6 m/s), 1 px noise, a
+  // gyro bias drawn from the filter's prior. The linear solution can be far enough off there to put
+  // many features, all 1-10 m away, behind the camera (here up to 30 of 67; in the simulated starts
+  // of make initsuite, with a noisy accelerometer, 34 of 50), and refined on those it kept the
+  // alignment confirmed itself (roll/pitch 5-7 sigma off there). Placed again for the refined
+  // window they rejoin it: it uses the features it tracks, and its joint covariance holds.
+  const char* dir = std::getenv("DATA_DIR");
+  const std::string path = std::string(dir ? dir : "") + "/trajectories/euroc_V1_01_easy.txt";
+  if (!dir || !std::ifstream(path)) GTEST_SKIP() << "DATA_DIR/trajectories/euroc_V1_01_easy.txt not found";
+  const sim::Scenario sc = sim::tumScenario(path, 15.0, 6);
+  std::mt19937_64 rng(23);
+  constexpr double kBiasSigma = 0.002;  // the filter's default prior [rad/s], as the simulated starts draw it
+  std::normal_distribution<double> bias(0.0, kBiasSigma);
+  double nees = 0.0, min_share = 1.0;
+  int dims = 0, n = 0;
+  for (int i = 0; i < 16; ++i) {
+    const double t0 = sc.trajectory->startTime() + 98.0 + 0.25 * i;
+    const Vec3 b_g(bias(rng), bias(rng), bias(rng));
+    const Window w =
+        runWindow(*sc.trajectory, sc.world, sc.camera, sc.T_b_c, t0, t0 + 1.0, 0.0, 1.0, &rng, 0.05, b_g, kBiasSigma);
+    if (!w.result) continue;
+    const JointError j = jointError(w, 5);
+    const double e = j.e.dot(j.P.ldlt().solve(j.e));
+    std::printf("window at %.2f s: %d of %d features, %zu landmarks, joint NEES %.2f per dimension\n",
+                t0 - sc.trajectory->startTime(), w.result->features, w.tracked, w.result->landmarks.size(),
+                e / static_cast<double>(j.e.size()));
+    min_share = std::min(min_share, w.result->features / static_cast<double>(std::min(w.tracked, 80)));
+    nees += e;
+    dims += static_cast<int>(j.e.size());
+    ++n;
+  }
+  ASSERT_GE(n, 12);
+  std::printf("joint NEES of velocity, roll/pitch and inverse depths %.2f per dimension (%d windows); the "
+              "alignment used at least %.0f%% of the features tracked\n", nees / dims, n, 100.0 * min_share);
+  // Every feature here is near enough for its depth: measured 95% at least (the linear
+  // solution's choice alone: 55%, 37 of 67 features at 99 s).
+  EXPECT_GE(min_share, 0.9);
+  // As above (chi^2(dims) / dims ~ 1, a linearization's covariance): measured 1.16.
   EXPECT_LT(nees / dims, 1.5);
 }
 
