@@ -262,8 +262,9 @@ TEST(DynamicInit, AGyroBiasItDoesNotEstimateIsInItsJointCovariance) {
       "gyro bias considered: joint NEES of velocity, roll/pitch and inverse depths %.2f per dimension (%d "
       "windows, %d dimensions)\n",
       nees / dims, n, dims);
-  // As above: a linearization's covariance, chi^2(dims) / dims ~ 1. Measured 0.48 (0.31 before the features the linear solution misplaced rejoined): conservative,
-  // the former b_g T bound stays on top of the first-order share (docs/initialization.md).
+  // As above: a linearization's covariance, chi^2(dims) / dims ~ 1. Measured 0.48 (0.31 before
+  // the features the linear solution misplaced rejoined): conservative, the former b_g T bound
+  // stays on top of the first-order share (docs/initialization.md).
   EXPECT_LT(nees / dims, 1.5);
 }
 
