@@ -147,14 +147,15 @@ std::vector<const CameraFrame*> DynamicInitializer::coveredFrames(double span_s)
 
 std::optional<DynamicInitResult> DynamicInitializer::tryInitialize(std::string* why) {
   std::string first_why;
-  std::optional<DynamicInitResult> r = alignSpan(params_.window_s, &first_why);
-  if (!r && first_why.rfind("degenerate motion", 0) == 0 && params_.max_window_s > params_.window_s) {
+  bool degenerate = false;
+  std::optional<DynamicInitResult> r = alignSpan(params_.window_s, &first_why, &degenerate);
+  if (!r && degenerate && params_.max_window_s > params_.window_s) {
     // Too little motion in the window: the frames before it may hold the acceleration it lacks.
     const std::vector<const CameraFrame*> longer = coveredFrames(params_.max_window_s);
     const double span = longer.empty() ? 0.0 : longer.back()->timestamp - longer.front()->timestamp;
     if (span > 1.1 * params_.window_s) {
       std::string longer_why;
-      r = alignSpan(span, &longer_why);
+      r = alignSpan(span, &longer_why, nullptr);
       if (!r) {
         std::ostringstream w;
         w.precision(3);
@@ -167,10 +168,15 @@ std::optional<DynamicInitResult> DynamicInitializer::tryInitialize(std::string* 
   return r;
 }
 
-std::optional<DynamicInitResult> DynamicInitializer::alignSpan(double span_s, std::string* why) {
+std::optional<DynamicInitResult> DynamicInitializer::alignSpan(double span_s, std::string* why, bool* degenerate) {
   auto fail = [&](const std::string& w) -> std::optional<DynamicInitResult> {
     if (why) *why = w;
     return std::nullopt;
+  };
+  // The window's motion leaves the state unobservable (a longer window may not).
+  auto failDegenerate = [&](const std::string& w) {
+    if (degenerate) *degenerate = true;
+    return fail(w);
   };
   if (imu_.size() < 2 || frames_.empty()) return fail("waiting for IMU and images");
   const std::vector<const CameraFrame*> window = coveredFrames(span_s);
@@ -489,7 +495,8 @@ std::optional<DynamicInitResult> DynamicInitializer::alignSpan(double span_s, st
       const Vec3 pc = cameraPoint(o.frame, pf, y);
       const Mat3 R_ck = R_c_b * pre[static_cast<size_t>(o.frame)].R.transpose();
       const Vec3 d = R_ck * dpf_drho;
-      info += (Eigen::Vector2d(d.x() - pc.x() / pc.z() * d.z(), d.y() - pc.y() / pc.z() * d.z()) / pc.z()).squaredNorm();
+      info +=
+          (Eigen::Vector2d(d.x() - pc.x() / pc.z() * d.z(), d.y() - pc.y() / pc.z() * d.z()) / pc.z()).squaredNorm();
     }
     const double sigma_rho = params_.pixel_noise_px / f_px / std::sqrt(std::max(info, 1e-300));
     return sigma_rho < 0.5 * rho;
@@ -617,7 +624,7 @@ std::optional<DynamicInitResult> DynamicInitializer::alignSpan(double span_s, st
   }
   if (search <= 0.0) refine(0.0, true);
   if (!std::isfinite(refine(best_dt))) {
-    return fail("degenerate motion: the alignment has no solution with the features in front of the camera");
+    return failDegenerate("degenerate motion: the alignment has no solution with the features in front of the camera");
   }
   // A feature whose depth the refined window leaves undetermined (pushed far out along its ray)
   // leaves the alignment: its Cartesian normal equations are singular and would make up a
@@ -633,7 +640,7 @@ std::optional<DynamicInitResult> DynamicInitializer::alignSpan(double span_s, st
     }
     if (dropped == 0) break;
     if (round == 4 || !std::isfinite(refine(best_dt))) {
-      return fail("degenerate motion: too few features whose depth the window determines");
+      return failDegenerate("degenerate motion: too few features whose depth the window determines");
     }
   }
   {
@@ -806,7 +813,7 @@ std::optional<DynamicInitResult> DynamicInitializer::alignSpan(double span_s, st
   };
   double sigma_v = 0.0, sigma_tilt = 0.0;
   sigmas(params_.pixel_noise_px, &sigma_v, &sigma_tilt);
-  if (!observable(sigma_v, sigma_tilt)) return fail(quality.str());
+  if (!observable(sigma_v, sigma_tilt)) return failDegenerate(quality.str());
 
   // Reprojection residuals and depths.
   double sum_sq = 0.0;
@@ -834,7 +841,7 @@ std::optional<DynamicInitResult> DynamicInitializer::alignSpan(double span_s, st
   const int dof = std::max(1, rows - (3 * num_active + 5));
   const double sigma_px = std::max(params_.pixel_noise_px, std::sqrt(sum_sq / dof));
   sigmas(sigma_px, &sigma_v, &sigma_tilt);
-  if (!observable(sigma_v, sigma_tilt)) return fail(quality.str());
+  if (!observable(sigma_v, sigma_tilt)) return failDegenerate(quality.str());
   r.state.timestamp = times.back();
   r.time_offset_correction_s = best_dt;
   r.state.q_n_b = y_out.q_n_b;
@@ -913,7 +920,7 @@ std::optional<DynamicInitResult> DynamicInitializer::alignSpan(double span_s, st
   if (!(r.scale_sigma <= params_.max_scale_sigma)) {
     quality << "degenerate motion: the scene's scale known to " << 100.0 * r.scale_sigma << "% only (more than "
             << 100.0 * params_.max_scale_sigma << "%): too little acceleration for its depth";
-    return fail(quality.str());
+    return failDegenerate(quality.str());
   }
   if (last_depths.size() >= 3) {
     std::nth_element(last_depths.begin(), last_depths.begin() + static_cast<std::ptrdiff_t>(last_depths.size() / 2),

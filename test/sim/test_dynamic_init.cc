@@ -44,7 +44,7 @@ struct Window {
   std::string why;
   sim::TrajectorySample truth;                ///< at the last frame
   std::map<std::int64_t, double> true_depth;  ///< of the features in the last frame
-  int tracked = 0;                             ///< features seen in min_observations frames or more
+  int tracked = 0;                            ///< features seen in min_observations frames or more
 };
 
 /// IMU at 1 kHz (exact) and noise-free frames at 20 Hz over [t0, t1] into the initializer.
@@ -301,8 +301,10 @@ TEST(DynamicInit, FeaturesTheLinearSolutionPutsBehindTheCameraRejoinTheRefinemen
     ++n;
   }
   ASSERT_GE(n, 12);
-  std::printf("joint NEES of velocity, roll/pitch and inverse depths %.2f per dimension (%d windows); the "
-              "alignment used at least %.0f%% of the features tracked\n", nees / dims, n, 100.0 * min_share);
+  std::printf(
+      "joint NEES of velocity, roll/pitch and inverse depths %.2f per dimension (%d windows); the "
+      "alignment used at least %.0f%% of the features tracked\n",
+      nees / dims, n, 100.0 * min_share);
   // Every feature here is near enough for its depth: measured 95% at least (the linear
   // solution's choice alone: 55%, 37 of 67 features at 99 s).
   EXPECT_GE(min_share, 0.9);

@@ -131,7 +131,8 @@ class DynamicInitializer {
   /// The frames the IMU covers (with the time offset search's margin at both ends), the last
   /// span_s of them, oldest first.
   std::vector<const CameraFrame*> coveredFrames(double span_s) const;
-  std::optional<DynamicInitResult> alignSpan(double span_s, std::string* why);
+  /// *degenerate (if given) is set when it fails because the motion leaves the state unobservable.
+  std::optional<DynamicInitResult> alignSpan(double span_s, std::string* why, bool* degenerate);
 
   DynamicInitParams params_;
   CameraModel camera_;
