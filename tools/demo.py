@@ -42,11 +42,15 @@ def replay(bag, mech, out, config, rviz, rate, log, start=0.0):
     deadline = time.time() + 40
     switched = False
     while time.time() < deadline and launch.poll() is None:
-        r = subprocess.run(["rosrun", "dynamic_reconfigure", "dynparam", "set", "/vi_ekf_slam/filter",
-                            "mechanization", mech], env=env, stdout=log, stderr=subprocess.STDOUT)
-        # Read it back: a results table labelled with a mechanization that did not run is worse than none.
-        got = subprocess.run(["rosrun", "dynamic_reconfigure", "dynparam", "get", "/vi_ekf_slam/filter"], env=env,
-                             capture_output=True, text=True).stdout
+        # dynparam waits for a master for ever: a launch that failed (its master gone) must not hang here.
+        try:
+            r = subprocess.run(["rosrun", "dynamic_reconfigure", "dynparam", "set", "/vi_ekf_slam/filter",
+                                "mechanization", mech], env=env, stdout=log, stderr=subprocess.STDOUT, timeout=10)
+            # Read it back: a results table labelled with a mechanization that did not run is worse than none.
+            got = subprocess.run(["rosrun", "dynamic_reconfigure", "dynparam", "get", "/vi_ekf_slam/filter"], env=env,
+                                 capture_output=True, text=True, timeout=10).stdout
+        except subprocess.TimeoutExpired:
+            continue
         if r.returncode == 0 and "'mechanization': '%s'" % mech in got:
             switched = True
             break
