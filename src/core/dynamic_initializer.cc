@@ -244,10 +244,19 @@ std::optional<DynamicInitResult> DynamicInitializer::alignSpan(double span_s, st
   // residual's times `scale` (1: normalized coordinates, f_px: pixels).
   const double ba_sigma = std::max(1e-6, params_.accel_bias_sigma_mps2);
   auto biasPriorWeight = [&](double scale) { return std::pow(scale * params_.pixel_noise_px / f_px / ba_sigma, 2); };
+  // The body position in {I0} of a frame t after the first, integrated as P.
+  auto bodyPosition = [&](const Preintegrated& P, double t, const VecY& yy) {
+    return Vec3(yy.head<3>() * t + 0.5 * yy.segment<3>(3) * t * t + P.alpha + P.A * yy.tail<3>());
+  };
   // The feature pf in the camera of a frame t after the first, integrated as P.
   auto cameraPointWith = [&](const Preintegrated& P, double t, const Vec3& pf, const VecY& yy) {
-    const Vec3 p_k = yy.head<3>() * t + 0.5 * yy.segment<3>(3) * t * t + P.alpha + P.A * yy.tail<3>();
-    return Vec3(R_c_b * P.R.transpose() * (pf - p_k) + p_c_b);
+    return Vec3(R_c_b * P.R.transpose() * (pf - bodyPosition(P, t, yy)) + p_c_b);
+  };
+  // d (x / z, y / z) / d pc of a point pc in the camera.
+  auto projectionJacobian = [](const Vec3& pc) {
+    Eigen::Matrix<double, 2, 3> Jp;
+    Jp << 1.0 / pc.z(), 0.0, -pc.x() / (pc.z() * pc.z()), 0.0, 1.0 / pc.z(), -pc.y() / (pc.z() * pc.z());
+    return Jp;
   };
   auto cameraPoint = [&](int k, const Vec3& pf, const VecY& yy) {
     return cameraPointWith(pre[static_cast<size_t>(k)], times[static_cast<size_t>(k)] - times.front(), pf, yy);
@@ -377,8 +386,7 @@ std::optional<DynamicInitResult> DynamicInitializer::alignSpan(double span_s, st
         const Vec3 pc = cameraPoint(o.frame, p_f[j], y);
         if (!(pc.z() > 0.05)) return false;
         const Eigen::Vector2d e = scale * (pc.head<2>() / pc.z() - o.xn);
-        Eigen::Matrix<double, 2, 3> Jp;
-        Jp << 1.0 / pc.z(), 0.0, -pc.x() / (pc.z() * pc.z()), 0.0, 1.0 / pc.z(), -pc.y() / (pc.z() * pc.z());
+        const Eigen::Matrix<double, 2, 3> Jp = projectionJacobian(pc);
         const Eigen::Matrix<double, 2, 3> Jf = scale * Jp * R_ck;
         Eigen::Matrix<double, 2, 9> Jy;
         Jy << -t * Jf, -0.5 * t * t * Jf, -Jf * pre[static_cast<size_t>(o.frame)].A;
@@ -512,7 +520,7 @@ std::optional<DynamicInitResult> DynamicInitializer::alignSpan(double span_s, st
       const double t = times[static_cast<size_t>(o.frame)] - times.front();
       const Preintegrated& P = pre[static_cast<size_t>(o.frame)];
       const Mat3 R_ck = R_c_b * P.R.transpose();
-      const Vec3 p_k = y.head<3>() * t + 0.5 * y.segment<3>(3) * t * t + P.alpha + P.A * y.tail<3>();
+      const Vec3 p_k = bodyPosition(P, t, y);
       Eigen::Matrix<double, 2, 3> E;
       E << 1.0, 0.0, -o.xn.x(), 0.0, 1.0, -o.xn.y();
       const Eigen::Matrix<double, 2, 3> Af = E * R_ck;
@@ -527,8 +535,7 @@ std::optional<DynamicInitResult> DynamicInitializer::alignSpan(double span_s, st
         const Vec3 pc = cameraPoint(o.frame, pf, y);
         if (!(pc.z() > 0.05)) return false;
         const Mat3 R_ck = R_c_b * pre[static_cast<size_t>(o.frame)].R.transpose();
-        Eigen::Matrix<double, 2, 3> Jp;
-        Jp << 1.0 / pc.z(), 0.0, -pc.x() / (pc.z() * pc.z()), 0.0, 1.0 / pc.z(), -pc.y() / (pc.z() * pc.z());
+        const Eigen::Matrix<double, 2, 3> Jp = projectionJacobian(pc);
         const Eigen::Matrix<double, 2, 3> Jf = Jp * R_ck;
         Hj += Jf.transpose() * Jf;
         bj += Jf.transpose() * (pc.head<2>() / pc.z() - o.xn);
