@@ -15,6 +15,7 @@ registration does not enter.
                 [--window 20] [--seed 1] [--threads N]
 """
 import argparse
+import glob
 import json
 import os
 import subprocess
@@ -23,8 +24,10 @@ import sys
 from study_cli import add_study_options
 from suite import fmt
 
-TRAJECTORIES = [("builtin", "builtin"), ("tum_corridor", "trajectories/tum_corridor1_512_16_okvis.txt"),
-                ("euroc_V1_01", "trajectories/euroc_V1_01_easy.txt")]
+# The built-in walk, then every TUM file in DATA_DIR/trajectories (a file added there joins), short
+# names for the known ones.
+SHORT_NAMES = {"tum_corridor1_512_16_okvis": "tum_corridor", "euroc_V1_01_easy": "euroc_V1_01",
+               "udel_arl_short": "udel_arl"}
 MIN_FRACTION_WITHIN = 0.95  # of the runs initialized within INIT_WITHIN_S (issue 16)
 INIT_WITHIN_S = 1.5
 
@@ -51,11 +54,14 @@ def main():
     a = ap.parse_args()
 
     rows = []
-    for name, rel in TRAJECTORIES:
-        traj = rel if rel == "builtin" else os.path.join(a.data, rel)
-        if traj != "builtin" and not os.path.exists(traj):
-            print("  %s: skipped (%s not found)" % (name, traj))
-            continue
+    trajectories = [("builtin", "builtin")]
+    files = sorted(glob.glob(os.path.join(a.data, "trajectories", "*.txt")))
+    if not files:
+        print("  no trajectory files in %s: the built-in walk only" % os.path.join(a.data, "trajectories"))
+    for path in files:
+        stem = os.path.splitext(os.path.basename(path))[0]
+        trajectories.append((SHORT_NAMES.get(stem, stem), path))
+    for name, traj in trajectories:
         dyn = study(a, traj, "dynamic", os.path.join(a.out, name, "dynamic"))
         ref = study(a, traj, "truth", os.path.join(a.out, name, "truth"))
         pri = study(a, traj, "prior", os.path.join(a.out, name, "prior"))

@@ -694,8 +694,7 @@ std::optional<DynamicInitResult> DynamicInitializer::alignSpan(double span_s, st
     o.q_n_b = (q_n_I0 * Quat(pk.R)).normalized();
     o.v_n = q_n_I0 * (yy.head<3>() + yy.segment<3>(3) * t_K + pk.beta + pk.B * yy.tail<3>());
     if (q_ref) {
-      const Mat3 D = (o.q_n_b * q_ref->conjugate()).toRotationMatrix();
-      const Quat unyaw(Eigen::AngleAxisd(-std::atan2(D(1, 0), D(0, 0)), Vec3::UnitZ()));
+      const Quat unyaw(Eigen::AngleAxisd(-yawBetween(*q_ref, o.q_n_b), Vec3::UnitZ()));
       o.q_n_b = unyaw * o.q_n_b;
       o.v_n = unyaw * o.v_n;
     }

@@ -10,6 +10,7 @@
 #include <sstream>
 
 #include "vi_ekf_slam/core/chi_squared.h"
+#include "vi_ekf_slam/core/so3.h"
 
 namespace vi_ekf_slam::eval {
 
@@ -19,11 +20,6 @@ namespace {
 /// (image stamp + estimated time offset), which need not be a truth stamp.
 std::optional<StampedPose> truthAt(const std::vector<StampedPose>& truth, double t) {
   return interpolatePose(truth, t, 0.2);
-}
-
-double yawOf(const Quat& q) {
-  const Vec3 x = q * Vec3::UnitX();
-  return std::atan2(x.y(), x.x());
 }
 
 }  // namespace
@@ -36,7 +32,7 @@ RunMetrics evaluateRun(const std::vector<EstimatedPose>& est, const std::vector<
   while (first < est.size() && !truthAt(truth, est[first].t)) ++first;
   if (first == est.size()) return m;
   const std::optional<StampedPose> g0 = truthAt(truth, est[first].t);
-  const double dyaw = yawOf(g0->q) - yawOf(est[first].q);
+  const double dyaw = yawBetween(est[first].q, g0->q);
   const Quat R(Eigen::AngleAxisd(dyaw, Vec3::UnitZ()));
   const Vec3 T = g0->p - R * est[first].p;
   Eigen::Matrix<double, 6, 6> G = Eigen::Matrix<double, 6, 6>::Zero();

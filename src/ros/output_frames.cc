@@ -98,9 +98,7 @@ nav_msgs::Odometry reexpressed(const nav_msgs::Odometry& odom, const Eigen::Isom
 }
 
 Eigen::Isometry3d gravityAlignedOffset(const Eigen::Isometry3d& T_o_b, const Eigen::Isometry3d& T_w_b) {
-  // argmax over psi of trace(Rz(psi)^T R_d), R_d = R_o_b R_w_b^T.
-  const Mat3 R_d = T_o_b.linear() * T_w_b.linear().transpose();
-  const double yaw = std::atan2(R_d(1, 0) - R_d(0, 1), R_d(0, 0) + R_d(1, 1));
+  const double yaw = yawBetween(Quat(T_w_b.linear()), Quat(T_o_b.linear()));
   Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
   T.linear() = Eigen::AngleAxisd(yaw, Vec3::UnitZ()).toRotationMatrix();
   T.translation() = T_o_b.translation() - T.linear() * T_w_b.translation();

@@ -6,6 +6,7 @@
 #include <deque>
 #include <optional>
 
+#include "vi_ekf_slam/core/so3.h"
 #include "vi_ekf_slam/core/static_initializer.h"
 
 namespace vi_ekf_slam::sim {
@@ -23,12 +24,8 @@ NavState trueNavState(const Trajectory& trajectory, double t) {
 NavState registerToTruth(const NavState& aligned, const NavState& truth, const InitialUncertainty& u,
                          std::mt19937_64& rng) {
   std::normal_distribution<double> n(0.0, 1.0);
-  auto yawOf = [](const Quat& q) {
-    const Mat3 R = q.toRotationMatrix();
-    return std::atan2(R(1, 0), R(0, 0));
-  };
   const double yaw_error = u.yaw_rad * n(rng);
-  const Quat R_z(Eigen::AngleAxisd(yawOf(truth.q_n_b) - yawOf(aligned.q_n_b) - yaw_error, Vec3::UnitZ()));
+  const Quat R_z(Eigen::AngleAxisd(yawBetween(aligned.q_n_b, truth.q_n_b) - yaw_error, Vec3::UnitZ()));
   NavState r = aligned;
   r.q_n_b = (R_z * aligned.q_n_b).normalized();
   r.v_n_b = R_z * aligned.v_n_b;

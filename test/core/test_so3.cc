@@ -33,3 +33,20 @@ TEST(So3, RightJacobianMatchesNumeric) {
     EXPECT_LT(test::maxAbs(Jn - rightJacobianSO3(phi)), 1e-8);
   }
 }
+
+// The yaw between two attitudes is the z rotation that turns one into the other, for any body
+// axes: an IMU mounted x up (EuRoC's) has no usable heading of its x axis, and a 10 mrad tilt
+// difference moved that heading by up to 0.5 rad.
+TEST(So3, YawBetweenAttitudesHoldsForABodyWithItsXAxisUp) {
+  std::mt19937_64 rng(4);
+  const Quat x_up(Eigen::AngleAxisd(-0.5 * M_PI, Vec3::UnitY()));  // body x along {n}'s -z
+  for (int i = 0; i < 20; ++i) {
+    const Quat q = (expQuat(test::randomVec(rng, 0.05)) * x_up).normalized();  // x within 3 deg of vertical
+    const double yaw = std::uniform_real_distribution<double>(-3.0, 3.0)(rng);
+    const Vec3 tilt = test::randomVec(rng, 0.01).cwiseProduct(Vec3(1.0, 1.0, 0.0));
+    const Quat turned = (expQuat(tilt) * Quat(Eigen::AngleAxisd(yaw, Vec3::UnitZ())) * q).normalized();
+    EXPECT_NEAR(yawBetween(q, turned), yaw, 1e-3);
+    EXPECT_NEAR(yawBetween(turned, q), -yaw, 1e-3);
+  }
+  EXPECT_NEAR(yawBetween(x_up, x_up), 0.0, 1e-12);
+}

@@ -60,9 +60,11 @@ def compose(a, b):
     return (pa[0] + r[0], pa[1] + r[1], pa[2] + r[2]), qmul(qa, qb)
 
 
-def yaw_of(q):
-    x = rotate(q, (1.0, 0.0, 0.0))
-    return math.atan2(x[1], x[0])
+def yaw_between(q_from, q_to):
+    """The z rotation nearest to R_to R_from^T (defined whatever the body's axes)."""
+    d = qmul(q_to, qconj(q_from))
+    x, y = rotate(d, (1.0, 0.0, 0.0)), rotate(d, (0.0, 1.0, 0.0))
+    return math.atan2(x[1] - y[0], x[0] + y[1])
 
 
 def angle_of(q):
@@ -141,7 +143,7 @@ class Rep105Check(unittest.TestCase):
         pairs = [(e, pose(g)) for e, g in pairs if g is not None]
         self.assertGreater(len(pairs), 50, "no ground truth at the odometry stamps")
         (e0p, e0q), (g0p, g0q) = pairs[0]
-        d = yaw_of(g0q) - yaw_of(e0q)
+        d = yaw_between(e0q, g0q)
         q_reg = (math.cos(d / 2), 0.0, 0.0, math.sin(d / 2))
         r0 = rotate(q_reg, e0p)
         shift = tuple(g - r for g, r in zip(g0p, r0))

@@ -35,6 +35,7 @@
 #include <sstream>
 
 #include "vi_ekf_slam/EkfSlamReconfigureConfig.h"
+#include "vi_ekf_slam/core/so3.h"
 #include "vi_ekf_slam/FilterStatus.h"
 #include "vi_ekf_slam/ros/conversions.h"
 
@@ -52,11 +53,7 @@ struct Recorder {
   ros::Time last_diag;
 };
 
-double yawOf(const geometry_msgs::Quaternion& q) {
-  const Eigen::Quaterniond e(q.w, q.x, q.y, q.z);
-  const Eigen::Vector3d x = e * Eigen::Vector3d::UnitX();
-  return std::atan2(x.y(), x.x());
-}
+Eigen::Quaterniond quat(const geometry_msgs::Quaternion& q) { return {q.w, q.x, q.y, q.z}; }
 
 Eigen::Vector3d pos(const geometry_msgs::Point& p) { return {p.x, p.y, p.z}; }
 
@@ -234,7 +231,8 @@ TEST(FilterNode, BehavesOnThisInputStream) {
     const auto g0 = truthAt(rec.odom[first].header.stamp.toSec());
     const auto g1 = truthAt(rec.odom.back().header.stamp.toSec());
     ASSERT_TRUE(g0 && g1) << "no ground truth at the odometry stamps";
-    const double dyaw = yawOf(g0->pose.orientation) - yawOf(rec.odom[first].pose.pose.orientation);
+    const double dyaw =
+        vi_ekf_slam::yawBetween(quat(rec.odom[first].pose.pose.orientation), quat(g0->pose.orientation));
     const Eigen::Matrix3d R = Eigen::AngleAxisd(dyaw, Eigen::Vector3d::UnitZ()).toRotationMatrix();
     const Eigen::Vector3d t = pos(g0->pose.position) - R * pos(rec.odom[first].pose.pose.position);
     const Eigen::Vector3d e = R * pos(rec.odom.back().pose.pose.position) + t - pos(g1->pose.position);

@@ -10,6 +10,7 @@
 #include <map>
 
 #include "synthetic_rig.h"
+#include "vi_ekf_slam/core/so3.h"
 #include "vi_ekf_slam/ros/conversions.h"
 #include "vi_ekf_slam/ros/ekf_slam_processor.h"
 
@@ -88,10 +89,7 @@ NodeParams testParams() {
 }
 
 Eigen::Vector3d pos(const geometry_msgs::Point& p) { return {p.x, p.y, p.z}; }
-double yawOf(const geometry_msgs::Quaternion& q) {
-  const Eigen::Vector3d x = Eigen::Quaterniond(q.w, q.x, q.y, q.z) * Eigen::Vector3d::UnitX();
-  return std::atan2(x.y(), x.x());
-}
+Eigen::Quaterniond quat(const geometry_msgs::Quaternion& q) { return {q.w, q.x, q.y, q.z}; }
 
 /// The checks every run gets: nothing non-finite, odometry at the camera rate with landmarks and
 /// a status per image, the final error after registering the first pose (after the last restart
@@ -123,7 +121,7 @@ void check(const StreamRun& r, const Expect& e) {
     const auto& o1 = r.out.odom.back();
     const geometry_msgs::Pose g0 = truthAt(o0.header.stamp.toSec()), g1 = truthAt(o1.header.stamp.toSec());
     const Eigen::Matrix3d R =
-        Eigen::AngleAxisd(yawOf(g0.orientation) - yawOf(o0.pose.pose.orientation), Eigen::Vector3d::UnitZ())
+        Eigen::AngleAxisd(yawBetween(quat(o0.pose.pose.orientation), quat(g0.orientation)), Eigen::Vector3d::UnitZ())
             .toRotationMatrix();
     const Eigen::Vector3d err =
         R * (pos(o1.pose.pose.position) - pos(o0.pose.pose.position)) + pos(g0.position) - pos(g1.position);

@@ -104,8 +104,7 @@ struct JointError {
 JointError jointError(const Window& w, int k) {
   const DynamicInitResult& r = *w.result;
   const auto m = static_cast<Eigen::Index>(r.landmarks.size());
-  const Mat3 D = (r.state.q_n_b * w.truth.q_n_b.conjugate()).toRotationMatrix();
-  const Quat unyaw(Eigen::AngleAxisd(std::atan2(D(1, 0), D(0, 0)), Vec3::UnitZ()));
+  const Quat unyaw(Eigen::AngleAxisd(yawBetween(w.truth.q_n_b, r.state.q_n_b), Vec3::UnitZ()));
   Eigen::Matrix<double, 5, 1> x;
   x.head<3>() = unyaw * w.truth.v_n_b - r.state.v_n_b;
   x.tail<2>() = logSO3(((unyaw * w.truth.q_n_b) * r.state.q_n_b.conjugate()).toRotationMatrix()).head<2>();

@@ -47,6 +47,14 @@ inline Vec3 logQuat(const Quat& q_in) {
 /// Rotation matrix -> rotation vector.
 inline Vec3 logSO3(const Mat3& R) { return logQuat(Quat(R)); }
 
+/// The angle [rad] of the rotation about {n}'s z axis that best turns attitude R_n_from into
+/// R_n_to: the z rotation nearest (Frobenius) to R_n_to R_n_from^T. Defined whatever the body's
+/// axes: the heading of one body axis is not when that axis is near vertical (an IMU mounted x up).
+inline double yawBetween(const Quat& q_n_from, const Quat& q_n_to) {
+  const Mat3 D = (q_n_to * q_n_from.conjugate()).toRotationMatrix();
+  return std::atan2(D(1, 0) - D(0, 1), D(0, 0) + D(1, 1));
+}
+
 /// Right Jacobian of SO(3): Exp(phi + d) ~= Exp(phi) * Exp(Jr(phi) * d).
 inline Mat3 rightJacobianSO3(const Vec3& phi) {
   const double theta = phi.norm();
