@@ -154,9 +154,10 @@ suite: build
 	python3 tools/suite.py --study $(BIN)/vi_ekf_slam_study --data $(DATA_DIR) --out $(SUITE_OUT) --runs $(SUITE_RUNS) \
 	  --seed $(SEED) --threads $(JOBS) $(if $(SUITE_CONFIGS),--configs $(SUITE_CONFIGS)) $(if $(STUDY_ARGS),-- $(STUDY_ARGS))
 
-# Starting mid-walk (docs/initialization.md): on the built-in walk, the TUM corridor and EuRoC
-# V1_01, the study from 5 random start times (20 runs) with the node's default configuration,
-# started as the node starts (at rest or moving), from the truth and from the prior; one table.
+# Starting mid-walk (docs/initialization.md): on the built-in walk, every trajectory in
+# DATA_DIR/trajectories and the walks of tools/make_walks.py, the study from 5 random start times
+# (20 runs) with the node's default configuration, started as the node starts (at rest or moving),
+# from the truth and from the prior; one table.
 #   make initsuite [SEED=1] [INIT_OUT=results/init_suite]
 INIT_OUT ?= results/init_suite
 initsuite: build

@@ -24,8 +24,9 @@ import sys
 from study_cli import add_study_options
 from suite import fmt
 
-# The built-in walk, then every TUM file in DATA_DIR/trajectories (a file added there joins), short
-# names for the known ones.
+# The built-in walk, every TUM file in DATA_DIR/trajectories (a file added there joins; short names
+# for the known ones) and the suite's generated walks.
+HERE = os.path.dirname(os.path.abspath(__file__))
 SHORT_NAMES = {"tum_corridor1_512_16_okvis": "tum_corridor", "euroc_V1_01_easy": "euroc_V1_01",
                "udel_arl_short": "udel_arl"}
 MIN_FRACTION_WITHIN = 0.95  # of the runs initialized within INIT_WITHIN_S (issue 16)
@@ -61,6 +62,11 @@ def main():
     for path in files:
         stem = os.path.splitext(os.path.basename(path))[0]
         trajectories.append((SHORT_NAMES.get(stem, stem), path))
+    # The suite's generated walks (tools/make_walks.py): a slow start, stops, stairs, a fast walk.
+    walks = os.path.join(a.out, "walks")
+    subprocess.run([sys.executable, os.path.join(HERE, "make_walks.py"), walks], check=True, stdout=subprocess.DEVNULL)
+    for path in sorted(glob.glob(os.path.join(walks, "*.txt"))):
+        trajectories.append(("walk_" + os.path.splitext(os.path.basename(path))[0], path))
     for name, traj in trajectories:
         dyn = study(a, traj, "dynamic", os.path.join(a.out, name, "dynamic"))
         ref = study(a, traj, "truth", os.path.join(a.out, name, "truth"))
