@@ -15,18 +15,16 @@ registration does not enter.
                 [--window 20] [--seed 1] [--threads N]
 """
 import argparse
-import glob
 import json
 import os
 import subprocess
 import sys
 
 from study_cli import add_study_options
-from suite import fmt
+from suite import fmt, trajectory_files, walk_files, write_walks
 
 # The built-in walk, every TUM file in DATA_DIR/trajectories (a file added there joins; short names
 # for the known ones) and the suite's generated walks.
-HERE = os.path.dirname(os.path.abspath(__file__))
 SHORT_NAMES = {"tum_corridor1_512_16_okvis": "tum_corridor", "euroc_V1_01_easy": "euroc_V1_01",
                "udel_arl_short": "udel_arl"}
 MIN_FRACTION_WITHIN = 0.95  # of the runs initialized within INIT_WITHIN_S (issue 16)
@@ -56,17 +54,14 @@ def main():
 
     rows = []
     trajectories = [("builtin", "builtin")]
-    files = sorted(glob.glob(os.path.join(a.data, "trajectories", "*.txt")))
+    files = trajectory_files(a.data)
     if not files:
         print("  no trajectory files in %s: the built-in walk only" % os.path.join(a.data, "trajectories"))
     for path in files:
         stem = os.path.splitext(os.path.basename(path))[0]
         trajectories.append((SHORT_NAMES.get(stem, stem), path))
     # The suite's generated walks (tools/make_walks.py): a slow start, stops, stairs, a fast walk.
-    walks = os.path.join(a.out, "walks")
-    subprocess.run([sys.executable, os.path.join(HERE, "make_walks.py"), walks], check=True, stdout=subprocess.DEVNULL)
-    for path in sorted(glob.glob(os.path.join(walks, "*.txt"))):
-        trajectories.append(("walk_" + os.path.splitext(os.path.basename(path))[0], path))
+    trajectories += walk_files(write_walks(a.out))
     for name, traj in trajectories:
         dyn = study(a, traj, "dynamic", os.path.join(a.out, name, "dynamic"))
         ref = study(a, traj, "truth", os.path.join(a.out, name, "truth"))

@@ -41,15 +41,31 @@ KNOWN = {
 }
 
 
+def trajectory_files(data_dir):
+    """Every TUM file in DATA_DIR/trajectories, sorted."""
+    return sorted(glob.glob(os.path.join(data_dir, "trajectories", "*.txt")))
+
+
+def write_walks(out_dir):
+    """The walks of tools/make_walks.py written into OUT_DIR/walks; returns that folder."""
+    walks = os.path.join(out_dir, "walks")
+    subprocess.run([sys.executable, os.path.join(HERE, "make_walks.py"), walks], check=True, stdout=subprocess.DEVNULL)
+    return walks
+
+
+def walk_files(walks_dir):
+    """(name, path) of every walk in WALKS_DIR, sorted."""
+    return [("walk_" + os.path.splitext(os.path.basename(p))[0], p)
+            for p in sorted(glob.glob(os.path.join(walks_dir, "*.txt")))]
+
+
 def cases(data_dir, walks_dir):
     out = [("builtin", "builtin", 0.0, 0.0)]
-    traj_dir = os.path.join(data_dir, "trajectories")
-    for path in sorted(glob.glob(os.path.join(traj_dir, "*.txt"))):
+    for path in trajectory_files(data_dir):
         name = os.path.splitext(os.path.basename(path))[0]
         for start in KNOWN.get(os.path.basename(path), [0.0]):
             out.append(("%s@%d" % (name, start), path, start, WINDOW_S))
-    for path in sorted(glob.glob(os.path.join(walks_dir, "*.txt"))):
-        out.append(("walk_" + os.path.splitext(os.path.basename(path))[0], path, 0.0, 0.0))
+    out += [(name, path, 0.0, 0.0) for name, path in walk_files(walks_dir)]
     return out
 
 
@@ -185,8 +201,7 @@ def main():
     except ValueError:
         sys.exit("suite: --seed takes integers, comma-separated")
 
-    walks = os.path.join(a.out, "walks")
-    subprocess.run([sys.executable, os.path.join(HERE, "make_walks.py"), walks], check=True, stdout=subprocess.DEVNULL)
+    walks = write_walks(a.out)
     configs = a.configs.split(",")
     t_start = time.time()
     if len(seeds) == 1:
