@@ -23,23 +23,9 @@ from nav_msgs.msg import Odometry
 from std_msgs.msg import Time
 from tf2_msgs.msg import TFMessage
 
+from quaternions import qconj, qmul, rotate, yaw_between
+
 PKG = "vi_ekf_slam"
-
-
-def qmul(a, b):
-    """Hamilton product of (w, x, y, z) quaternions."""
-    aw, ax, ay, az = a
-    bw, bx, by, bz = b
-    return (aw * bw - ax * bx - ay * by - az * bz, aw * bx + ax * bw + ay * bz - az * by,
-            aw * by - ax * bz + ay * bw + az * bx, aw * bz + ax * by - ay * bx + az * bw)
-
-
-def qconj(q):
-    return (q[0], -q[1], -q[2], -q[3])
-
-
-def rotate(q, v):
-    return qmul(qmul(q, (0.0,) + tuple(v)), qconj(q))[1:]
 
 
 def pose(msg_pose):
@@ -58,13 +44,6 @@ def compose(a, b):
     pb, qb = b
     r = rotate(qa, pb)
     return (pa[0] + r[0], pa[1] + r[1], pa[2] + r[2]), qmul(qa, qb)
-
-
-def yaw_between(q_from, q_to):
-    """The z rotation nearest to R_to R_from^T (defined whatever the body's axes)."""
-    d = qmul(q_to, qconj(q_from))
-    x, y = rotate(d, (1.0, 0.0, 0.0)), rotate(d, (0.0, 1.0, 0.0))
-    return math.atan2(x[1] - y[0], x[0] + y[1])
 
 
 def angle_of(q):

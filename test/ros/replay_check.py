@@ -25,27 +25,14 @@ from geometry_msgs.msg import PoseStamped
 from nav_msgs.msg import Odometry
 from vi_ekf_slam.msg import FilterStatus
 
+from quaternions import from_msg, yaw_between
+
 PKG = "vi_ekf_slam"
-
-
-def rotation_matrix(q):
-    w, x, y, z = q.w, q.x, q.y, q.z
-    return [[1 - 2 * (y * y + z * z), 2 * (x * y - w * z), 2 * (x * z + w * y)],
-            [2 * (x * y + w * z), 1 - 2 * (x * x + z * z), 2 * (y * z - w * x)],
-            [2 * (x * z - w * y), 2 * (y * z + w * x), 1 - 2 * (x * x + y * y)]]
-
-
-def yaw_between(q_from, q_to):
-    """The z rotation nearest to R_to R_from^T: defined whatever the body's axes (the heading of
-    one body axis is not when it is near vertical, as EuRoC's IMU x axis is)."""
-    a, b = rotation_matrix(q_to), rotation_matrix(q_from)
-    d = [[sum(a[i][k] * b[j][k] for k in range(3)) for j in range(3)] for i in range(3)]
-    return math.atan2(d[1][0] - d[0][1], d[0][0] + d[1][1])
 
 
 def register(est0, gt0):
     """Yaw + translation taking the first estimate onto the truth (both unobservable)."""
-    d = yaw_between(est0.orientation, gt0.orientation)
+    d = yaw_between(from_msg(est0.orientation), from_msg(gt0.orientation))
     c, s = math.cos(d), math.sin(d)
 
     def apply(p):

@@ -35,11 +35,15 @@
 #include <sstream>
 
 #include "vi_ekf_slam/EkfSlamReconfigureConfig.h"
+#include "msg_eigen.h"
 #include "vi_ekf_slam/core/so3.h"
 #include "vi_ekf_slam/FilterStatus.h"
 #include "vi_ekf_slam/ros/conversions.h"
 
 namespace {
+
+using vi_ekf_slam::test::pos;
+using vi_ekf_slam::test::quat;
 
 struct Recorder {
   std::mutex m;
@@ -52,10 +56,6 @@ struct Recorder {
   int max_inputs_level = 0;
   ros::Time last_diag;
 };
-
-Eigen::Quaterniond quat(const geometry_msgs::Quaternion& q) { return {q.w, q.x, q.y, q.z}; }
-
-Eigen::Vector3d pos(const geometry_msgs::Point& p) { return {p.x, p.y, p.z}; }
 
 }  // namespace
 

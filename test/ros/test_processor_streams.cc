@@ -10,6 +10,7 @@
 #include <map>
 
 #include "synthetic_rig.h"
+#include "msg_eigen.h"
 #include "vi_ekf_slam/core/so3.h"
 #include "vi_ekf_slam/ros/conversions.h"
 #include "vi_ekf_slam/ros/ekf_slam_processor.h"
@@ -17,6 +18,8 @@
 namespace vi_ekf_slam::glue {
 namespace {
 
+using test::pos;
+using test::quat;
 using test::RigOptions;
 
 struct Recorder : OutputSink {
@@ -87,9 +90,6 @@ NodeParams testParams() {
   EXPECT_EQ(loadParams(yaml, &p), "");
   return p;
 }
-
-Eigen::Vector3d pos(const geometry_msgs::Point& p) { return {p.x, p.y, p.z}; }
-Eigen::Quaterniond quat(const geometry_msgs::Quaternion& q) { return {q.w, q.x, q.y, q.z}; }
 
 /// The checks every run gets: nothing non-finite, odometry at the camera rate with landmarks and
 /// a status per image, the final error after registering the first pose (after the last restart
