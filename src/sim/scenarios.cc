@@ -1,6 +1,7 @@
 #include "vi_ekf_slam/sim/scenarios.h"
 
 #include <cmath>
+#include <utility>
 
 namespace vi_ekf_slam::sim {
 
@@ -34,12 +35,12 @@ ImuNoiseParams paperImuNoise() {
   return n;
 }
 
-Scenario circleScenario(double duration_s, bool noise, std::uint64_t world_seed) {
+namespace {
+/// A scenario on `trajectory` with the paper's camera and IMU; `noise` false makes the sensors
+/// exact (the scenarios that check the math).
+Scenario paperSensors(std::shared_ptr<const Trajectory> trajectory, bool noise = true) {
   Scenario sc;
-  const double radius = 6.0;
-  sc.trajectory = std::make_shared<CircleTrajectory>(radius, 0.25, 0.04, duration_s);
-  std::mt19937_64 rng(world_seed);
-  sc.world = cylinderWorld(Vec3(0.0, radius, 0.0), radius + 4.0, -3.0, 1.5, 400, rng);
+  sc.trajectory = std::move(trajectory);
   sc.camera = paperCamera();
   sc.T_b_c = torsoCameraExtrinsics();
   sc.imu.noise = paperImuNoise();
@@ -47,33 +48,34 @@ Scenario circleScenario(double duration_s, bool noise, std::uint64_t world_seed)
   sc.cam.pixel_noise_px = noise ? 1.0 : 0.0;
   return sc;
 }
+}  // namespace
+
+Scenario circleScenario(double duration_s, bool noise, std::uint64_t world_seed) {
+  const double radius = 6.0;
+  Scenario sc = paperSensors(std::make_shared<CircleTrajectory>(radius, 0.25, 0.04, duration_s), noise);
+  std::mt19937_64 rng(world_seed);
+  sc.world = cylinderWorld(Vec3(0.0, radius, 0.0), radius + 4.0, -3.0, 1.5, 400, rng);
+  return sc;
+}
 
 Scenario wallScenario(double duration_s, bool noise, std::uint64_t world_seed) {
-  Scenario sc;
-  sc.trajectory = std::make_shared<LissajousTrajectory>(Vec3::Zero(), Vec3(0.3, 0.4, 0.2), Vec3(1.1, 0.8, 1.7),
-                                                        Vec3(0.1, 0.08, 0.15), Vec3(0.9, 1.3, 0.7), duration_s);
+  Scenario sc =
+      paperSensors(std::make_shared<LissajousTrajectory>(Vec3::Zero(), Vec3(0.3, 0.4, 0.2), Vec3(1.1, 0.8, 1.7),
+                                                         Vec3(0.1, 0.08, 0.15), Vec3(0.9, 1.3, 0.7), duration_s),
+                   noise);
   std::mt19937_64 rng(world_seed);
   std::uniform_real_distribution<double> depth(5.0, 8.0), lateral(-2.5, 2.5), vertical(-1.8, 1.8);
   for (int i = 0; i < 25; ++i) {
     const double x = depth(rng), y = lateral(rng), z = vertical(rng);
     sc.world.push_back({i, Vec3(x, y, z)});
   }
-  sc.camera = paperCamera();
-  sc.T_b_c = torsoCameraExtrinsics();
-  sc.imu.noise = paperImuNoise();
-  sc.imu.noise_enabled = noise;
-  sc.cam.pixel_noise_px = noise ? 1.0 : 0.0;
   return sc;
 }
 
 Scenario hallwayScenario(const HallwayParams& params, double density_per_m2, std::uint64_t world_seed) {
-  Scenario sc;
-  sc.trajectory = pedestrianWalk(params);
+  Scenario sc = paperSensors(pedestrianWalk(params));
   std::mt19937_64 rng(world_seed);
   sc.world = landmarksOnQuads(hallwayGeometry(params), density_per_m2, rng);
-  sc.camera = paperCamera();
-  sc.T_b_c = torsoCameraExtrinsics();
-  sc.imu.noise = paperImuNoise();
   return sc;
 }
 
@@ -97,13 +99,10 @@ CameraExtrinsics forwardLookingExtrinsics(const Trajectory& traj) {
 }
 
 Scenario tumScenario(const std::string& path, double per_metre, std::uint64_t world_seed) {
-  Scenario sc;
-  sc.trajectory = loadTumTrajectory(path);
+  Scenario sc = paperSensors(loadTumTrajectory(path));
   std::mt19937_64 rng(world_seed);
   sc.world = landmarksAroundTrajectory(*sc.trajectory, per_metre, 1.0, 10.0, rng);
-  sc.camera = paperCamera();
-  sc.T_b_c = forwardLookingExtrinsics(*sc.trajectory);
-  sc.imu.noise = paperImuNoise();
+  sc.T_b_c = forwardLookingExtrinsics(*sc.trajectory);  // a TUM file's body axes are its own
   return sc;
 }
 
