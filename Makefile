@@ -167,11 +167,12 @@ initsuite: build
 # The real hand-held recording (../shared/data/dmvio_handheld, docs/realdata.md): its ASL folder as
 # a rig bag (cached), then the node's processor offline for the three mechanizations with the
 # default configuration, and the default with the rig file; each against the SfM reference (camera
-# poses, camera clock) and OpenVINS (IMU poses, IMU clock). Tables, health and reference plots.
+# poses, camera clock), OpenVINS (IMU poses, IMU clock) and the SfM reference from 15 s on (the data
+# set's README trusts its first 15 s less). Tables, health and reference plots.
 REAL      := $(DATA_DIR)/dmvio_handheld
 REAL_BAG  := results/bags/dmvio_handheld.bag
-REAL_REFS := reference:=$(REAL)/reference/sfm_camera_poses.txt,$(REAL)/reference/openvins_imu_poses.txt \
-             reference_frame:=camera,body reference_clock:=camera,imu
+REAL_REFS := reference:=$(REAL)/reference/sfm_camera_poses.txt,$(REAL)/reference/openvins_imu_poses.txt,$(REAL)/reference/sfm_camera_poses.txt \
+             reference_frame:=camera,body,camera reference_clock:=camera,imu,camera reference_from_s:=0,0,15
 $(REAL_BAG): $(BIN)/vi_ekf_slam_asl_to_bag
 	@mkdir -p $(dir $@)
 	$(BIN)/vi_ekf_slam_asl_to_bag --asl $(REAL)/mav0 --out $@

@@ -4,8 +4,11 @@
 //
 //   vi_ekf_slam_run_bag bag:=FILE [out:=DIR] [config:=YAML] [rig:=YAML] [mechanization:=NAME|all] [plots:=false]
 //                       [reference:=FILE.tum[,FILE2.tum] [reference_alignment:=sim3|se3|posyaw]
-//                        [reference_frame:=body|camera] [reference_clock:=imu|camera]] [NAME:=VALUE ...]
-// (the reference_* options take one value for every file or one per file, comma-separated)
+//                        [reference_frame:=body|camera] [reference_clock:=imu|camera] [reference_from_s:=S]]
+//                       [NAME:=VALUE ...]
+// (the reference_* options take one value for every file or one per file, comma-separated;
+// reference_from_s:= compares only the poses from S seconds after the bag's start, for a reference
+// whose first seconds are less trustworthy)
 //   vi_ekf_slam_run_bag bag:=FILE recorded:=NAME=REC.bag[,NAME=REC.bag...] [out:=DIR]
 // The second form evaluates recordings of live replays (odom, status, landmarks of the node)
 // against the same input bag, with the same metrics.
@@ -23,6 +26,8 @@
 // several, the tool says which and asks to choose).
 #include <algorithm>
 #include <chrono>
+#include <cmath>
+#include <cstdio>
 #include <iomanip>
 #include <optional>
 #include <filesystem>
@@ -211,6 +216,7 @@ void writeTrace(const std::string& path, const RecordingSink& sink) {
 struct Reference {
   std::string path, frame, clock;
   eval::Alignment alignment = eval::Alignment::kSim3;
+  double from_s = 0.0;  ///< compare from this long after the bag's start [s]
   std::vector<eval::StampedPose> poses;
 };
 
@@ -243,6 +249,15 @@ std::vector<Reference> parseReferences(std::map<std::string, std::string>& args)
           "reference_alignment:= sim3|se3|posyaw, reference_frame:= body|camera, reference_clock:= imu|camera");
     }
     r.alignment = *a;
+    const std::string from = pick("reference_from_s", "0", i);
+    try {
+      size_t used = 0;
+      r.from_s = std::stod(from, &used);
+      if (used != from.size()) throw std::invalid_argument(from);
+    } catch (const std::exception&) {
+      r.from_s = -1.0;
+    }
+    if (!std::isfinite(r.from_s) || r.from_s < 0.0) throw std::runtime_error("reference_from_s:= takes seconds >= 0");
     r.poses = eval::readTum(r.path);
     refs.push_back(std::move(r));
   }
@@ -351,7 +366,8 @@ int main(int argc, char** argv) {
   const char* const usage =
       "usage: vi_ekf_slam_run_bag bag:=FILE [out:=DIR] [config:=YAML] [rig:=YAML] [mechanization:=NAME|all] "
       "[imu_topic:=T] [image_topic:=T] [camera_info_topic:=T] [plots:=false] [reference:=FILE.tum[,...] "
-      "[reference_alignment:=sim3|se3|posyaw] [reference_frame:=body|camera] [reference_clock:=imu|camera]] "
+      "[reference_alignment:=sim3|se3|posyaw] [reference_frame:=body|camera] [reference_clock:=imu|camera] "
+      "[reference_from_s:=S]] "
       "[PARAM:=VALUE ...]\n"
       "       vi_ekf_slam_run_bag bag:=FILE recorded:=NAME=REC.bag[,...] [out:=DIR]\n"
       "Runs the node's processor over a bag offline (deterministic, as fast as the CPU allows) and evaluates it.\n";
@@ -508,19 +524,27 @@ int main(int argc, char** argv) {
         continue;
       }
       try {
-        const eval::ReferenceComparison c =
-            eval::compareWithReference(referenceView(sink, info, ref.frame, ref.clock), ref.poses, ref.alignment);
+        std::vector<eval::StampedPose> view = referenceView(sink, info, ref.frame, ref.clock);
+        if (ref.from_s > 0.0) {
+          j["from_s"] = ref.from_s;
+          const double from = info.start + ref.from_s;
+          view.erase(std::remove_if(view.begin(), view.end(), [&](const eval::StampedPose& p) { return p.t < from; }),
+                     view.end());
+        }
+        const eval::ReferenceComparison c = eval::compareWithReference(view, ref.poses, ref.alignment);
         j.update({{"matched", c.matched},
                   {"position_rmse_m", c.position_rmse_m},
                   {"rotation_rmse_deg", c.rotation_rmse_deg},
                   {"scale_reference_units_per_m", c.scale},
                   {"estimate_path_m", c.estimate_path_m},
                   {"reference_path_m", c.reference_path_m}});
+        char from_text[48] = "";
+        if (ref.from_s > 0.0) std::snprintf(from_text, sizeof(from_text), ", from %g s", ref.from_s);
         std::printf(
-            "  against %s (%s, %s poses, %s clock): %d matched, position RMSE %.3f m, rotation RMSE %.2f deg, "
+            "  against %s (%s, %s poses, %s clock%s): %d matched, position RMSE %.3f m, rotation RMSE %.2f deg, "
             "scale %.3f reference units per metre, path %.2f m (reference %.2f m)\n",
-            ref.path.c_str(), eval::toString(c.alignment).c_str(), ref.frame.c_str(), ref.clock.c_str(), c.matched,
-            c.position_rmse_m, c.rotation_rmse_deg, c.scale, c.estimate_path_m, c.reference_path_m);
+            ref.path.c_str(), eval::toString(c.alignment).c_str(), ref.frame.c_str(), ref.clock.c_str(), from_text,
+            c.matched, c.position_rmse_m, c.rotation_rmse_deg, c.scale, c.estimate_path_m, c.reference_path_m);
         std::ofstream rc(out + "/" + name + "_reference" + (k ? std::to_string(k + 1) : "") + ".csv");
         rc << "t,ex,ey,ez,rx,ry,rz\n" << std::setprecision(12);
         for (size_t i = 0; i < c.t.size(); ++i) {

@@ -112,6 +112,32 @@ TEST(ToolsCli, RunBagPicksTopicsAndReadsCompressedImages) {
   const Outcome typo = run(base + " imu_topic:=/imu/data max_landmark:=120");
   EXPECT_EQ(typo.code, 1) << typo.output;
   EXPECT_NE(typo.output.find("max_landmarks"), std::string::npos) << typo.output;
+  // A reference trusted only from some seconds on (reference_from_s:=): the run's own trajectory
+  // as the reference, whole and from 4 s of the 8 s bag on (poses from 1 s, after the static start):
+  // fewer poses compared, each matching itself.
+  const std::string own = dir + "/own.tum";
+  ASSERT_EQ(run("cp " + dir + "/out/world_centric.tum " + own).code, 0);
+  const Outcome refs =
+      run(base + " imu_topic:=/imu/data rig:=" + dir + "/rig.yaml mechanization:=world_centric reference:=" + own +
+          "," + own + " reference_from_s:=0,4");
+  EXPECT_EQ(refs.code, 0) << refs.output;
+  auto matched = [&](const std::string& after) {
+    const size_t at = refs.output.find(after);
+    if (at == std::string::npos) return -1;
+    const size_t m = refs.output.find(" matched", at);
+    const size_t start = refs.output.rfind(' ', m - 1) + 1;
+    return std::stoi(refs.output.substr(start, m - start));
+  };
+  const int whole = matched("imu clock): "), from_4 = matched("imu clock, from 4 s): ");
+  EXPECT_GT(from_4, 0) << refs.output;
+  EXPECT_GT(from_4, whole / 3) << refs.output;  // 4 s of the 7 s with poses
+  EXPECT_LT(from_4, 2 * whole / 3) << refs.output;
+  EXPECT_NE(refs.output.find("from 4 s): " + std::to_string(from_4) + " matched, position RMSE 0.000 m"),
+            std::string::npos)
+      << refs.output;
+  const Outcome negative = run(base + " imu_topic:=/imu/data reference:=" + own + " reference_from_s:=-1");
+  EXPECT_EQ(negative.code, 2) << negative.output;
+  EXPECT_NE(negative.output.find("reference_from_s"), std::string::npos) << negative.output;
 }
 
 // The suite runs on whatever trajectories a user drops into DATA_DIR/trajectories: a file the
