@@ -28,6 +28,7 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
 #include <iomanip>
 #include <optional>
 #include <filesystem>
@@ -250,14 +251,10 @@ std::vector<Reference> parseReferences(std::map<std::string, std::string>& args)
     }
     r.alignment = *a;
     const std::string from = pick("reference_from_s", "0", i);
-    try {
-      size_t used = 0;
-      r.from_s = std::stod(from, &used);
-      if (used != from.size()) throw std::invalid_argument(from);
-    } catch (const std::exception&) {
-      r.from_s = -1.0;
-    }
-    if (!std::isfinite(r.from_s) || r.from_s < 0.0) throw std::runtime_error("reference_from_s:= takes seconds >= 0");
+    char* end = nullptr;
+    r.from_s = std::strtod(from.c_str(), &end);
+    if (from.empty() || *end != '\0' || !std::isfinite(r.from_s) || r.from_s < 0.0)
+      throw std::runtime_error("reference_from_s:= takes seconds >= 0");
     r.poses = eval::readTum(r.path);
     refs.push_back(std::move(r));
   }

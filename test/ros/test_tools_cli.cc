@@ -7,6 +7,7 @@
 #include <sensor_msgs/CompressedImage.h>
 #include <sensor_msgs/Image.h>
 #include <sensor_msgs/Imu.h>
+#include <nlohmann/json.hpp>
 #include <sys/wait.h>
 
 #include <opencv2/imgcodecs.hpp>
@@ -121,19 +122,16 @@ TEST(ToolsCli, RunBagPicksTopicsAndReadsCompressedImages) {
       run(base + " imu_topic:=/imu/data rig:=" + dir + "/rig.yaml mechanization:=world_centric reference:=" + own +
           "," + own + " reference_from_s:=0,4");
   EXPECT_EQ(refs.code, 0) << refs.output;
-  auto matched = [&](const std::string& after) {
-    const size_t at = refs.output.find(after);
-    if (at == std::string::npos) return -1;
-    const size_t m = refs.output.find(" matched", at);
-    const size_t start = refs.output.rfind(' ', m - 1) + 1;
-    return std::stoi(refs.output.substr(start, m - start));
-  };
-  const int whole = matched("imu clock): "), from_4 = matched("imu clock, from 4 s): ");
-  EXPECT_GT(from_4, 0) << refs.output;
-  EXPECT_GT(from_4, whole / 3) << refs.output;  // 4 s of the 7 s with poses
-  EXPECT_LT(from_4, 2 * whole / 3) << refs.output;
-  EXPECT_NE(refs.output.find("from 4 s): " + std::to_string(from_4) + " matched, position RMSE 0.000 m"),
-            std::string::npos)
+  // What run_bag wrote for the two comparisons (health.json: one entry per reference).
+  const nlohmann::json refs_json =
+      nlohmann::json::parse(std::ifstream(dir + "/out/health.json"))["world_centric"]["references"];
+  ASSERT_EQ(refs_json.size(), 2u) << refs_json.dump();
+  const int whole = refs_json[0]["matched"], from_4 = refs_json[1]["matched"];
+  EXPECT_EQ(refs_json[1]["from_s"], 4.0) << refs_json.dump();
+  EXPECT_GT(from_4, whole / 3) << refs_json.dump();  // 4 s of the 7 s with poses
+  EXPECT_LT(from_4, 2 * whole / 3) << refs_json.dump();
+  EXPECT_LT(refs_json[1]["position_rmse_m"].get<double>(), 1e-6) << refs_json.dump();
+  EXPECT_NE(refs.output.find("imu clock, from 4 s): " + std::to_string(from_4) + " matched"), std::string::npos)
       << refs.output;
   const Outcome negative = run(base + " imu_topic:=/imu/data reference:=" + own + " reference_from_s:=-1");
   EXPECT_EQ(negative.code, 2) << negative.output;
