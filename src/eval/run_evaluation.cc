@@ -32,12 +32,11 @@ RunMetrics evaluateRun(const std::vector<EstimatedPose>& est, const std::vector<
   while (first < est.size() && !truthAt(truth, est[first].t)) ++first;
   if (first == est.size()) return m;
   const std::optional<StampedPose> g0 = truthAt(truth, est[first].t);
-  const double dyaw = yawBetween(est[first].q, g0->q);
-  const Quat R(Eigen::AngleAxisd(dyaw, Vec3::UnitZ()));
-  const Vec3 T = g0->p - R * est[first].p;
+  const Eigen::Isometry3d T_true_est = registrationAtFirstPose(est[first].p, est[first].q, g0->p, g0->q);
+  const Quat R(T_true_est.linear());
   Eigen::Matrix<double, 6, 6> G = Eigen::Matrix<double, 6, 6>::Zero();
-  G.topLeftCorner<3, 3>() = R.toRotationMatrix();
-  G.bottomRightCorner<3, 3>() = R.toRotationMatrix();
+  G.topLeftCorner<3, 3>() = T_true_est.linear();
+  G.bottomRightCorner<3, 3>() = T_true_est.linear();
   const double lo = chiSquaredQuantile(0.025, 6), hi = chiSquaredQuantile(0.975, 6);
   std::vector<Vec3> e_all, p_true, p_est;
   std::vector<double> q_deg, np, nq, npose, ms, tracker_ms;
@@ -48,7 +47,7 @@ RunMetrics evaluateRun(const std::vector<EstimatedPose>& est, const std::vector<
     RunFrame f;
     f.t = est[i].t;
     f.p_true = g->p;
-    f.p_est = R * est[i].p + T;
+    f.p_est = T_true_est * est[i].p;
     const Quat q_est = R * est[i].q;
     f.e_p = g->p - f.p_est;
     f.e_q = orientationError(g->q, q_est);
@@ -113,7 +112,7 @@ RunMetrics evaluateRun(const std::vector<EstimatedPose>& est, const std::vector<
       if (auto p = landmark_truth(l)) {
         le.push_back(l.p);
         lt.push_back(*p);
-        err.push_back((R * l.p + T - *p).norm());
+        err.push_back((T_true_est * l.p - *p).norm());
       }
     }
     m.map_landmarks = static_cast<int>(le.size());

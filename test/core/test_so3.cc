@@ -50,3 +50,21 @@ TEST(So3, YawBetweenAttitudesHoldsForABodyWithItsXAxisUp) {
   }
   EXPECT_NEAR(yawBetween(x_up, x_up), 0.0, 1e-12);
 }
+
+// The first-pose registration every evaluation uses: a trajectory turned about z and shifted is
+// put back exactly, its first pose onto the other's and every later pose with it.
+TEST(So3, RegistrationAtTheFirstPoseUndoesAYawAndATranslation) {
+  std::mt19937_64 rng(5);
+  for (int i = 0; i < 20; ++i) {
+    const double yaw = std::uniform_real_distribution<double>(-3.0, 3.0)(rng);
+    Eigen::Isometry3d T_to_from(Eigen::AngleAxisd(yaw, Vec3::UnitZ()));
+    T_to_from.translation() = test::randomVec(rng, 10.0);
+    const Vec3 p0 = test::randomVec(rng, 5.0), p1 = test::randomVec(rng, 5.0);
+    const Quat q0 = expQuat(test::randomVec(rng, 1.0));
+    const Quat q0_to(T_to_from.linear() * q0);
+    const Eigen::Isometry3d T = registrationAtFirstPose(p0, q0, T_to_from * p0, q0_to);
+    EXPECT_LT((T * p0 - T_to_from * p0).norm(), 1e-9);
+    EXPECT_LT((T * p1 - T_to_from * p1).norm(), 1e-9);
+    EXPECT_LT((T.linear() - T_to_from.linear()).norm(), 1e-9);
+  }
+}

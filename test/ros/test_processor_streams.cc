@@ -120,11 +120,9 @@ void check(const StreamRun& r, const Expect& e) {
     const auto& o0 = r.out.odom[first];
     const auto& o1 = r.out.odom.back();
     const geometry_msgs::Pose g0 = truthAt(o0.header.stamp.toSec()), g1 = truthAt(o1.header.stamp.toSec());
-    const Eigen::Matrix3d R =
-        Eigen::AngleAxisd(yawBetween(quat(o0.pose.pose.orientation), quat(g0.orientation)), Eigen::Vector3d::UnitZ())
-            .toRotationMatrix();
-    const Eigen::Vector3d err =
-        R * (pos(o1.pose.pose.position) - pos(o0.pose.pose.position)) + pos(g0.position) - pos(g1.position);
+    const Eigen::Isometry3d T_true_est = registrationAtFirstPose(
+        pos(o0.pose.pose.position), quat(o0.pose.pose.orientation), pos(g0.position), quat(g0.orientation));
+    const Eigen::Vector3d err = T_true_est * pos(o1.pose.pose.position) - pos(g1.position);
     std::printf("final position error %.3f m over %.1f m walked\n", err.norm(),
                 (pos(g1.position) - pos(g0.position)).norm());
     EXPECT_LT(err.norm(), e.max_final_error_m);

@@ -55,6 +55,16 @@ inline double yawBetween(const Quat& q_n_from, const Quat& q_n_to) {
   return std::atan2(D(1, 0) - D(0, 1), D(0, 0) + D(1, 1));
 }
 
+/// T_to_from: the turn about z by yawBetween(q_from, q_to) and the translation that put the pose
+/// (p_from, q_from) of one trajectory on the pose (p_to, q_to) of another: a visual-inertial
+/// estimate's unobservable yaw and position, registered at its first pose.
+inline Eigen::Isometry3d registrationAtFirstPose(const Vec3& p_from, const Quat& q_from, const Vec3& p_to,
+                                                 const Quat& q_to) {
+  Eigen::Isometry3d T(Eigen::AngleAxisd(yawBetween(q_from, q_to), Vec3::UnitZ()));
+  T.translation() = p_to - T.linear() * p_from;
+  return T;
+}
+
 /// Right Jacobian of SO(3): Exp(phi + d) ~= Exp(phi) * Exp(Jr(phi) * d).
 inline Mat3 rightJacobianSO3(const Vec3& phi) {
   const double theta = phi.norm();
