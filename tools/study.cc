@@ -228,6 +228,11 @@ std::vector<std::pair<std::string, EkfSlamConfig>> makeConfigs(const Options& o,
     c.zero_velocity.enabled = zero_velocity;
     c.zero_velocity.defer_landmarks = o.new_landmarks == "wait";
     if (gate > 0.0) c.update.gate_probability = gate;
+    // The paper's three, and a configuration named by its gate, gate at one probability; the
+    // others widen it on tracks without outliers as the node does (core/outlier_watch.h).
+    if (gate > 0.0 || (init == LandmarkInitMethod::kFixedDepth && trig == CompositionTrigger::kNewLandmarks)) {
+      c.update.clean_gate_probability = c.update.gate_probability;
+    }
     std::string name = toString(m);
     if (init == LandmarkInitMethod::kInverseDepth) name += "+inverse_depth";
     if (m == Mechanization::kSensorCentricComposition && trig == CompositionTrigger::kEveryUpdate) {

@@ -39,6 +39,7 @@ void EkfSlam::reset() {
   zero_velocity_updates_ = 0;
   stationary_.reset();
   divergence_.reset();
+  outlier_watch_.reset();
   delayed_.clear(nullptr);
   seen_moving_ = false;
 }
@@ -104,6 +105,7 @@ void EkfSlam::start(FilterState s, double scene_depth_m) {
     last_seen_[state_.landmarkIds()[static_cast<size_t>(i)]] = state_.timestamp;
   stationary_.reset();
   divergence_.reset();
+  outlier_watch_.reset();
   seen_moving_ = false;
   compositions_ = 0;
   zero_velocity_updates_ = 0;
@@ -357,7 +359,10 @@ FrameResult EkfSlam::processFrame(const CameraFrame& camera_frame) {
   updateSeenMoving(r);
   const bool defer =
       config_.zero_velocity.enabled && config_.zero_velocity.defer_landmarks && !seen_moving_ && !at_rest;
-  r.update = ekfUpdate(state_, known, camera_, T_b_c_, config_.update, last_gyro_ - state_.x.b_g);
+  UpdateParams update = config_.update;
+  update.gate_probability = r.gate_probability = outlier_watch_.gateProbability(config_.update);
+  r.update = ekfUpdate(state_, known, camera_, T_b_c_, update, last_gyro_ - state_.x.b_g);
+  outlier_watch_.record(r.update, seen_moving_ && !at_rest, frame.timestamp, config_.update);
   for (const auto& f : known) last_seen_[f.id] = frame.timestamp;
   if (triangulationActive()) {
     addLandmarksDelayed(fresh, frame.timestamp, defer, &r);

@@ -62,6 +62,10 @@ std::string EkfSlamConfig::validate() const {
   if (!(update.gate_probability > 0.0 && update.gate_probability < 1.0)) {
     err << "update.gate_probability must be in (0, 1) (got " << update.gate_probability << ")\n";
   }
+  if (!(update.clean_gate_probability > 0.0 && update.clean_gate_probability < 1.0)) {
+    err << "update.clean_gate_probability must be in (0, 1) (got " << update.clean_gate_probability << ")\n";
+  }
+  requireNonNegative(err, "update.clean_gate_s [s]", update.clean_gate_s);
   requirePositive(err, "landmark_depth_m [m]", landmark_depth_m);
   requirePositive(err, "landmark_depth_sigma_m [m]", landmark_depth_sigma_m);
   requirePositive(err, "inverse_depth_initial_m [m]", inverse_depth_initial_m);

@@ -32,6 +32,7 @@ UpdateResult ekfUpdate(FilterState& state, const std::vector<FeatureObservation>
   UpdateResult result;
   const double r_var = params.pixel_noise_px * params.pixel_noise_px;
   const double gate = chiSquaredQuantile(params.gate_probability, 2.0);
+  const double outlier = chiSquaredQuantile(std::max(params.gate_probability, params.clean_gate_probability), 2.0);
   const Eigen::MatrixXd& P0 = state.covariance();
   // Rolling shutter: when the row at v was read, relative to the state's time (the middle row).
   // First order, as the time offset: the prediction moves by the image velocity over it.
@@ -66,6 +67,7 @@ UpdateResult ekfUpdate(FilterState& state, const std::vector<FeatureObservation>
     Eigen::Matrix2d S = Hsub * Psub * Hsub.transpose() + r_var * Eigen::Matrix2d::Identity();
     S += a.H_td * P0(idx::kTd, idx::kTd) * a.H_td.transpose() + HP_td * a.H_td.transpose() + a.H_td * HP_td.transpose();
     const double d2 = a.residual.dot(S.ldlt().solve(a.residual));
+    if (!std::isfinite(d2) || d2 > outlier) ++result.outliers;
     if (!std::isfinite(d2) || d2 > gate) {
       result.rejected_ids.push_back(obs.id);
       continue;

@@ -200,6 +200,7 @@ vi_ekf_slam::FilterStatus toFilterStatus(const EkfSlam& filter, const NavState& 
   s.removed_landmarks = static_cast<int>(r.removed_ids.size());
   s.accepted_observations = r.update.accepted;
   s.rejected_observations = static_cast<int>(r.update.rejected_ids.size());
+  s.gate_probability = r.gate_probability;
   s.nis_per_dof = r.update.accepted > 0 ? r.update.nis_sum / (2.0 * r.update.accepted) : 0.0;
   s.time_offset_s = nav.t_d;
   s.time_offset_sigma_s = nav.t_d_sigma;

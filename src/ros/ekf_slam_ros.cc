@@ -200,6 +200,8 @@ void EkfSlamRos::diagnoseFilter(diagnostic_updater::DiagnosticStatusWrapper& sta
   stat.add("landmarks in state", f ? f->state().numLandmarks() : 0);
   stat.add("tracks", processor_->lastTracks());
   stat.add("rejected observations", processor_->counters().rejected_observations);
+  // narrow while the tracks show outliers (core/outlier_watch.h)
+  stat.add("gate probability", f ? f->gateProbability() : processor_->params().filter.update.gate_probability);
   stat.add("compositions", f ? f->compositions() : 0);
   stat.add("zero-velocity updates (standing)", f ? f->zeroVelocityUpdates() : 0);
   stat.add("resets", processor_->counters().resets);

@@ -125,8 +125,14 @@ std::vector<ParamSpec> makeTable() {
       field("pixel_noise_px", "filter", VI_FIELD(p.filter.update.pixel_noise_px), "px",
             "std-dev of a tracked feature position", dyn, 0.1, 10.0),
       field("gate_probability", "filter", VI_FIELD(p.filter.update.gate_probability), "probability",
-            "chi-square gate on each observation (2 dof); without outliers 0.9999 is more consistent", dyn, 0.5,
-            0.9999),
+            "chi-square gate on each observation (2 dof) while the tracks show outliers", dyn, 0.5, 0.9999),
+      field("clean_gate_probability", "filter", VI_FIELD(p.filter.update.clean_gate_probability), "probability",
+            "the gate once the images of clean_gate_s seconds of moving had no outlier (none beyond this gate); "
+            "below gate_probability: gate_probability always",
+            dyn, 0.5, 0.999999),
+      field("clean_gate_s", "filter", VI_FIELD(p.filter.update.clean_gate_s), "s",
+            "seconds of moving images without an outlier before the gate widens to clean_gate_probability", dyn, 0.0,
+            1e6),
       // --- map
       choice("landmark_init", "map", VI_FIELD(p.filter.landmark_init), "how new landmarks enter the state", dyn,
              std::vector<std::pair<L, std::string>>{{L::kFixedDepth, "paper: Cartesian point at a fixed depth"},

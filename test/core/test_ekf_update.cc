@@ -84,6 +84,7 @@ TEST(EkfUpdate, GateRejectsGrossOutlierAndReportsIt) {
   EXPECT_EQ(r.rejected_ids[0], obs[2].id);
   ASSERT_EQ(r.invalid_ids.size(), 1u);
   EXPECT_EQ(r.invalid_ids[0], 999);
+  EXPECT_EQ(r.outliers, 1);                 // beyond the clean gate too: the tracks show an outlier
   EXPECT_LT(s.boxminus(s0).norm(), 1e-10);  // the outlier did not move the state
 }
 
@@ -97,7 +98,9 @@ TEST(EkfUpdate, GateProbabilityIsConfigurable) {
   obs[0].uv += Eigen::Vector2d(2.8, 0.0);  // NIS ~ 7.8: outside the 95% gate, inside 99%
   UpdateParams p;
   FilterState a = s;
-  EXPECT_EQ(ekfUpdate(a, obs, cam, T, p).rejected_ids.size(), 1u);
+  const UpdateResult r = ekfUpdate(a, obs, cam, T, p);
+  EXPECT_EQ(r.rejected_ids.size(), 1u);
+  EXPECT_EQ(r.outliers, 0);  // a tail of the noise: inside the clean gate (99.99%)
   p.gate_probability = 0.99;
   FilterState b = s;
   EXPECT_EQ(ekfUpdate(b, obs, cam, T, p).accepted, 1);

@@ -13,6 +13,8 @@ struct FaultRun {
   bool finite = true;
   int frames = 0, imu_gaps = 0;
   int frames_in_dropout = 0, covered_frames_with_updates = 0, burst_frames_with_rejections = 0;
+  int walking_frames = 0, walking_frames_wide_gate = 0;  ///< 12-15 s: walking, the last outlier-free stretch
+  int burst_frames = 0, burst_frames_narrow_gate = 0;    ///< after the burst's first frame
 };
 
 FaultRun runWithFaults(const std::vector<sim::SensorFault>& faults) {
@@ -34,6 +36,15 @@ FaultRun runWithFaults(const std::vector<sim::SensorFault>& faults) {
                          ++r.covered_frames_with_updates;
                        if (in(sim::SensorFault::Kind::kOutlierBurst, rec.t) && !rec.result.update.rejected_ids.empty())
                          ++r.burst_frames_with_rejections;
+                       const bool wide = rec.result.gate_probability == c.update.clean_gate_probability;
+                       if (rec.t >= 12.0 && rec.t < 15.0) {
+                         ++r.walking_frames;
+                         r.walking_frames_wide_gate += wide ? 1 : 0;
+                       }
+                       if (rec.t >= 15.1 && rec.t < 16.0) {
+                         ++r.burst_frames;
+                         r.burst_frames_narrow_gate += rec.result.gate_probability == c.update.gate_probability ? 1 : 0;
+                       }
                      });
   return r;
 }
@@ -63,6 +74,18 @@ TEST(SensorFaults, FilterRidesThroughDropoutGapOutliersAndCoveredCamera) {
   EXPECT_GE(hit.imu_gaps, 1);
   EXPECT_EQ(hit.covered_frames_with_updates, 0);
   EXPECT_GE(hit.burst_frames_with_rejections, 20);  // nearly every one of the 28 burst frames
+  // The simulated tracks have no outliers until the burst: walking, the gate is the clean one;
+  // from the burst's first frame on it is narrow again (core/outlier_watch.h).
+  std::printf(
+      "wide gate walking (12-15 s): %d of %d frames (with the faults %d of %d); narrow in the burst: %d of %d\n",
+      clean.walking_frames_wide_gate, clean.walking_frames, hit.walking_frames_wide_gate, hit.walking_frames,
+      hit.burst_frames_narrow_gate, hit.burst_frames);
+  EXPECT_GT(clean.walking_frames, 70);
+  // (A tail of the noise beyond 99.99% narrows it for 1 s: ~0.3 of those in 3 s of 40 tracks.)
+  EXPECT_GE(clean.walking_frames_wide_gate, clean.walking_frames - 30);
+  EXPECT_GE(hit.walking_frames_wide_gate, hit.walking_frames - 30);
+  EXPECT_GT(hit.burst_frames, 20);
+  EXPECT_EQ(hit.burst_frames_narrow_gate, hit.burst_frames);
   EXPECT_LT(hit.final_error, 0.3);
   EXPECT_LT(hit.final_error, clean.final_error + 0.15);
 }

@@ -14,6 +14,7 @@
 #include "vi_ekf_slam/core/dynamic_initializer.h"
 #include "vi_ekf_slam/core/ekf_slam_config.h"
 #include "vi_ekf_slam/core/navigation_output.h"
+#include "vi_ekf_slam/core/outlier_watch.h"
 #include "vi_ekf_slam/core/types.h"
 
 namespace vi_ekf_slam {
@@ -22,6 +23,7 @@ struct FrameResult {
   bool processed = false;
   std::string error;  ///< why the frame was not processed
   UpdateResult update;
+  double gate_probability = 0.0;  ///< of the update's chi^2 gate (OutlierWatch: narrow while the tracks show outliers)
   std::vector<std::int64_t> new_ids;
   int new_triangulated = 0;  ///< of new_ids, those triangulated (the others entered at the prior depth)
   std::vector<std::int64_t> removed_ids;
@@ -93,6 +95,8 @@ class EkfSlam {
   const FilterState& state() const { return state_; }
 
   int compositions() const { return compositions_; }
+  /// The probability of the next update's chi^2 gate (OutlierWatch).
+  double gateProbability() const { return outlier_watch_.gateProbability(config_.update); }
   int imuGaps() const { return imu_gaps_; }
   /// Zero-velocity updates applied since the start or the last reset (standing detected).
   int zeroVelocityUpdates() const { return zero_velocity_updates_; }
@@ -149,6 +153,7 @@ class EkfSlam {
   int zero_velocity_updates_ = 0;
   StationaryDetector stationary_;
   DivergenceMonitor divergence_;
+  OutlierWatch outlier_watch_;
   DelayedLandmarks delayed_;
   bool seen_moving_ = false;  ///< parallax reached moving_parallax_px since the last stand (or start)
 };

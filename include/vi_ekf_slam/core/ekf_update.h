@@ -13,6 +13,11 @@ namespace vi_ekf_slam {
 struct UpdateParams {
   double pixel_noise_px = 1.0;     ///< std-dev of a feature position [px]
   double gate_probability = 0.95;  ///< chi^2 gate on each landmark's 2-dof innovation (0..1)
+  /// The wider gate (0..1; below gate_probability: gate_probability always) once the tracks have
+  /// shown no outlier over clean_gate_s seconds of moving images (OutlierWatch); an observation
+  /// beyond its chi^2 quantile counts as an outlier (UpdateResult::outliers), whatever gate was used.
+  double clean_gate_probability = 0.9999;
+  double clean_gate_s = 1.0;  ///< [s] (see clean_gate_probability)
   /// Linearizations per update [count]: 1 is the EKF, more the iterated EKF (the gate uses the
   /// first); the iterations stop early once the correction no longer changes.
   int iterations = 1;
@@ -27,6 +32,7 @@ struct UpdateResult {
   std::vector<std::int64_t> rejected_ids;  ///< failed the chi^2 gate
   std::vector<std::int64_t> invalid_ids;   ///< unknown id, behind the camera, or non-finite
   double nis_sum = 0.0;                    ///< sum of accepted normalized innovations squared
+  int outliers = 0;  ///< observations beyond the clean gate's chi^2 quantile (rejected whatever the gate)
 };
 
 /// Updates state and covariance with observations of landmarks that are in the map. omega_b is
