@@ -32,7 +32,7 @@ UpdateResult ekfUpdate(FilterState& state, const std::vector<FeatureObservation>
   UpdateResult result;
   const double r_var = params.pixel_noise_px * params.pixel_noise_px;
   const double gate = chiSquaredQuantile(params.gate_probability, 2.0);
-  const double outlier = chiSquaredQuantile(std::max(params.gate_probability, params.clean_gate_probability), 2.0);
+  const double outlier = chiSquaredQuantile(params.outlierProbability(), 2.0);
   const Eigen::MatrixXd& P0 = state.covariance();
   // Rolling shutter: when the row at v was read, relative to the state's time (the middle row).
   // First order, as the time offset: the prediction moves by the image velocity over it.

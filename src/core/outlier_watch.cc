@@ -5,7 +5,7 @@
 namespace vi_ekf_slam {
 
 double OutlierWatch::gateProbability(const UpdateParams& p) const {
-  return clean_s_ >= p.clean_gate_s ? std::max(p.gate_probability, p.clean_gate_probability) : p.gate_probability;
+  return clean_s_ >= p.clean_gate_s ? p.outlierProbability() : p.gate_probability;
 }
 
 void OutlierWatch::record(const UpdateResult& r, bool moving, double t, const UpdateParams& p) {

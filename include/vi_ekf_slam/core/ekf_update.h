@@ -2,6 +2,7 @@
 // per-landmark chi-square gating and a Joseph-stable covariance update.
 #pragma once
 
+#include <algorithm>
 #include <cstdint>
 #include <vector>
 
@@ -18,6 +19,9 @@ struct UpdateParams {
   /// beyond its chi^2 quantile counts as an outlier (UpdateResult::outliers), whatever gate was used.
   double clean_gate_probability = 0.9999;
   double clean_gate_s = 1.0;  ///< [s] (see clean_gate_probability)
+  /// The clean gate as used: at least gate_probability. An observation beyond its chi^2 quantile is
+  /// an outlier.
+  double outlierProbability() const { return std::max(gate_probability, clean_gate_probability); }
   /// Linearizations per update [count]: 1 is the EKF, more the iterated EKF (the gate uses the
   /// first); the iterations stop early once the correction no longer changes.
   int iterations = 1;
