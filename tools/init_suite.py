@@ -60,7 +60,7 @@ def main():
     for path in files:
         stem = os.path.splitext(os.path.basename(path))[0]
         trajectories.append((SHORT_NAMES.get(stem, stem), path))
-    # The suite's generated walks (tools/make_walks.py): a slow start, stops, stairs, a fast walk.
+    # The suite's generated walks (tools/make_walks.py): a slow start, a crawl, stops, stairs, a fast walk.
     trajectories += walk_files(write_walks(a.out))
     for name, traj in trajectories:
         dyn = study(a, traj, "dynamic", os.path.join(a.out, name, "dynamic"))

@@ -6,6 +6,8 @@ gait (bounce at the step frequency, lateral sway and yaw at the stride frequency
 speed) and a small postural sway when standing:
 
   slow_start  starts at a slow walk (0.5 m/s) and reaches 1.3 m/s only after 20 s;
+  crawl       starts at a crawl (0.3 m/s: feeling the way in smoke or the dark) for 10 s, then
+              1.3 m/s from 12 s (the gait's bounce, what tells the scale, at a quarter of a walk's);
   stops       1.3 m/s with stands of 5, 12 and 20 s (about a third of the time standing);
   stairs      walks, climbs a flight of stairs (2.8 m up over 5 m), walks on, comes back down;
   fast        a brisk walk at 2.4 m/s from the start (a hurried responder; the gait at its largest).
@@ -13,7 +15,7 @@ speed) and a small postural sway when standing:
 The files are made by a formula, not recorded: they exercise the starts, stands and climbs that
 held-out recordings have (issue 17), and the suite runs them next to the recorded trajectories.
 
-  make_walks.py OUT_DIR          writes OUT_DIR/{slow_start,stops,stairs,fast}.txt (100 Hz, z up)
+  make_walks.py OUT_DIR          writes OUT_DIR/{slow_start,crawl,stops,stairs,fast}.txt (100 Hz, z up)
 """
 import argparse
 import math
@@ -122,6 +124,8 @@ def make(kind):
             a = min(1.0, (t - 8.0) / 12.0)
             return 0.5 + (CRUISE_MPS - 0.5) * 0.5 * (1 - math.cos(math.pi * a))
         return walk(speed, 90.0, seed=1)
+    if kind == "crawl":
+        return walk(lambda t: smooth_steps(t, [(0, 0.3), (12, CRUISE_MPS), (90, CRUISE_MPS)]), 90.0, seed=5)
     if kind == "stops":
         knots = [(0, 1.3), (15, 0.0), (20, 1.3), (40, 0.0), (52, 1.3), (75, 0.0), (95, 1.3), (120, 1.3)]
         return walk(lambda t: smooth_steps(t, knots), 120.0, seed=2)
@@ -156,7 +160,7 @@ def make(kind):
 def main():
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("out_dir")
-    ap.add_argument("--kinds", default="slow_start,stops,stairs,fast")
+    ap.add_argument("--kinds", default="slow_start,crawl,stops,stairs,fast")
     a = ap.parse_args()
     os.makedirs(a.out_dir, exist_ok=True)
     for kind in a.kinds.split(","):

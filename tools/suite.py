@@ -4,7 +4,7 @@ table per trajectory and configuration, with a worst-case row per configuration.
 
 Cases: the built-in hallway walk; the TUM corridor, UDel ARL and EuRoC V1_01 (the non-pedestrian
 check) from DATA_DIR/trajectories, each in 120 s windows; and the walks of tools/make_walks.py
-(a slow start, stands, stairs, a fast walk). Any other *.txt in DATA_DIR/trajectories joins the suite
+(a slow start, a crawl, stands, stairs, a fast walk). Any other *.txt in DATA_DIR/trajectories joins the suite
 with one window from its start, so the command runs unchanged on trajectories added there.
 
   suite.py --study BIN [--data DIR] [--out results/suite] [--runs 8] [--seed 1 | --seed 1,2,3]

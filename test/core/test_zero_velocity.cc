@@ -1,5 +1,7 @@
 #include <gtest/gtest.h>
 
+#include <cmath>
+#include <optional>
 #include <random>
 
 #include "test_helpers.h"
@@ -112,6 +114,72 @@ TEST(ZeroVelocity, DetectorTellsStandingAndTurningFromWalking) {
     EXPECT_FALSE(d.decided);
     EXPECT_EQ(d.has_history, empty.timestamp >= params.window_s - 1e-9) << empty.timestamp;
   }
+}
+
+TEST(ZeroVelocity, ASlowWalkTowardsAFarSceneIsNotStandingWhenTheImagesShowTheFiltersMotion) {
+  // The camera looks along z at points 8-20 m ahead; walking at 0.3 m/s moves most of them by
+  // less than max_parallax_px over the window: the median alone calls it standing.
+  std::mt19937_64 rng(7);
+  const CameraModel cam = test::paperCamera();
+  std::vector<Vec3> world;
+  std::uniform_real_distribution<double> lat(-5.0, 5.0), depth(8.0, 20.0);
+  for (int i = 0; i < 120; ++i) world.emplace_back(lat(rng), 0.4 * lat(rng), depth(rng));
+  const ZeroVelocityParams params;
+  // true_speed: along z [m/s]; filter_v: the filter's velocity (nullopt: no ExpectedMotion).
+  auto decide = [&](double true_speed, std::optional<Vec3> filter_v) {
+    StationaryDetector det;
+    StationaryDetector::Decision d;
+    for (int k = 0; k <= 28; ++k) {
+      const double t = k / 28.0;
+      std::optional<ExpectedMotion> expected;
+      if (filter_v) {
+        expected = ExpectedMotion{};
+        expected->v_n_c = *filter_v;
+        expected->scene_depth_m = 5.0;  // the prior's depth: the points are 2-4 times as far
+        expected->pixel_noise_px = 0.5;
+      }
+      d = det.update(see(t, world, Mat3::Identity(), Vec3(0, 0, true_speed * t), cam, rng), Mat3::Identity(), cam,
+                     params, expected);
+    }
+    return d;
+  };
+  const auto median_alone = decide(0.3, std::nullopt);
+  ASSERT_TRUE(median_alone.decided);
+  EXPECT_LT(median_alone.parallax_px, params.max_parallax_px);  // the ambiguous case
+  EXPECT_TRUE(median_alone.stationary);
+  EXPECT_TRUE(std::isnan(median_alone.motion_shown));
+  // The filter walking at 0.3 m/s: the images show its motion (at a third of the flow the 5 m
+  // depth predicts), so no zero-velocity update.
+  const auto walking = decide(0.3, Vec3(0, 0, 0.3));
+  EXPECT_TRUE(walking.motion_confirmed) << walking.motion_shown << " +- " << walking.motion_shown_sigma;
+  EXPECT_FALSE(walking.stationary);
+  EXPECT_GT(walking.motion_shown, 0.2);
+  EXPECT_LT(walking.motion_shown, 0.7);
+  // Standing while the filter's velocity drifted to 0.3 m/s: the images refute it; standing.
+  const auto drifted = decide(0.0, Vec3(0, 0, 0.3));
+  EXPECT_FALSE(drifted.motion_confirmed);
+  EXPECT_LT(std::abs(drifted.motion_shown), 4.0 * drifted.motion_shown_sigma);
+  EXPECT_TRUE(drifted.stationary);
+  // Standing, the filter at nearly zero velocity: too small to show; the median decides.
+  const auto still = decide(0.0, Vec3(0.01, 0, 0.0));
+  EXPECT_GT(still.motion_shown_sigma, 5.0 * drifted.motion_shown_sigma);
+  EXPECT_FALSE(still.motion_confirmed);
+  EXPECT_TRUE(still.stationary);
+  // A slipped track (a 40 px jump along the filter's flow) does not make a stand a walk.
+  StationaryDetector det;
+  StationaryDetector::Decision d;
+  ExpectedMotion drifting;
+  drifting.v_n_c = Vec3(0, 0, 0.3);
+  drifting.pixel_noise_px = 0.5;
+  for (int k = 0; k <= 28; ++k) {
+    CameraFrame f = see(k / 28.0, world, Mat3::Identity(), Vec3::Zero(), cam, rng);
+    if (k >= 14)
+      f.features[0].uv +=
+          40.0 * (f.features[0].uv - Eigen::Vector2d(cam.intrinsics().cx, cam.intrinsics().cy)).normalized();
+    d = det.update(f, Mat3::Identity(), cam, params, drifting);
+  }
+  EXPECT_FALSE(d.motion_confirmed) << d.motion_shown << " +- " << d.motion_shown_sigma;
+  EXPECT_TRUE(d.stationary);
 }
 
 TEST(ZeroVelocity, ImuAtRestTellsAStillRigFromAJitteringOne) {

@@ -7,6 +7,8 @@
 
 #include <cstdint>
 #include <deque>
+#include <limits>
+#include <optional>
 #include <unordered_map>
 #include <vector>
 
@@ -65,23 +67,56 @@ struct ZeroVelocityParams {
 /// still_gyro_radps (a pedestrian's torso, even standing, sways well above both).
 bool imuAtRest(const std::deque<ImuData>& imu, double t0, double t1, const ZeroVelocityParams& params);
 
+/// The translation the filter believes in, to test the images against: a small median parallax
+/// is standing only if the images could have shown that translation and did not.
+struct ExpectedMotion {
+  Vec3 v_n_c = Vec3::Zero();    ///< the camera's estimated velocity in {n} [m/s]
+  double scene_depth_m = 5.0;   ///< depth of the features along the reference camera's axis [m]
+  double pixel_noise_px = 1.0;  ///< std-dev of a tracked feature position [px]
+};
+
 /// Decides from the tracked features whether the rig translated over the last window: each
 /// feature's ray from the start of the window is rotated into the current camera with the
 /// filter's own relative rotation (gyro-accurate over 0.5 s) and compared with where it is seen
 /// now, so turning on the spot is still "standing".
+///
+/// A small median parallax alone is not standing: walking slowly towards a far scene moves most
+/// features by little more than the pixel noise (a 0.3 m/s walk, points 5-15 m ahead: a median of
+/// 2.5-3.5 px over 0.5 s), and a zero-velocity update there took a walk for a stand: the velocity
+/// 0.27 m/s off with a sigma of 0.03 in one image (docs/suite.md). So, given the filter's own
+/// velocity (ExpectedMotion), the displacements are fitted with the flow that translation would
+/// make at the scene's depth: lambda, the share of it the images show (0 standing, 1 moving as the
+/// filter says at that depth), by least squares robust to slipped tracks. Its pattern (which way
+/// each feature moves) is what tells; its size depends on the scene's depth, unknown at a start
+/// (lambda 0.46 in the image where that update fired: the points farther than the 5 m prior).
+/// Where lambda is surely above 0 and lambda times the filter's speed is beyond a stand's sway
+/// (velocity_sigma_mps: a swaying rig translates too, and along the filter's drift as often as
+/// not), the images show the filter's translation and the rig is not standing, whatever the median
+/// says. Where the filter's velocity is too small for the scene to show (a stand after a
+/// zero-velocity update), lambda's sigma is large and the median decides as before.
 class StationaryDetector {
  public:
   struct Decision {
     bool has_history = false;  ///< a frame at least window_s old was available
     bool decided = false;      ///< enough history and features to tell
-    bool stationary = false;   ///< decided and the parallax is below the threshold
+    bool stationary = false;   ///< decided, the parallax below the threshold and the motion not shown
     double parallax_px = 0.0;
     int features = 0;
+    /// The share of the filter's translation over the window that the images show (NaN: no
+    /// ExpectedMotion or no feature to tell), and its std-dev from the pixel noise.
+    double motion_shown = std::numeric_limits<double>::quiet_NaN();
+    double motion_shown_sigma = std::numeric_limits<double>::infinity();
+    /// lambda times the filter's speed: the speed the images show at the scene's depth [m/s].
+    double motion_shown_speed_mps = 0.0;
+    /// The images show the filter's translation (lambda above 0 by 4 sigmas) at a speed beyond a
+    /// stand's sway (velocity_sigma_mps).
+    bool motion_confirmed = false;
   };
 
-  /// R_n_c: the estimated camera orientation at the frame's time.
+  /// R_n_c: the estimated camera orientation at the frame's time; expected: the filter's
+  /// translation to test against (none: the median parallax alone decides).
   Decision update(const CameraFrame& frame, const Mat3& R_n_c, const CameraModel& camera,
-                  const ZeroVelocityParams& params);
+                  const ZeroVelocityParams& params, const std::optional<ExpectedMotion>& expected = std::nullopt);
   void reset() { history_.clear(); }
 
  private:
