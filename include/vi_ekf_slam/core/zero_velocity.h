@@ -81,13 +81,13 @@ struct ExpectedMotion {
 /// now, so turning on the spot is still "standing".
 ///
 /// A small median parallax alone is not standing: walking slowly towards a far scene moves most
-/// features by little more than the pixel noise (a 0.3 m/s walk, points 5-15 m ahead: a median of
-/// 2.5-3.5 px over 0.5 s), and a zero-velocity update there took a walk for a stand: the velocity
-/// 0.27 m/s off with a sigma of 0.03 in one image (docs/suite.md). So, given the filter's own
-/// velocity (ExpectedMotion), the displacements are fitted with the flow that translation would
-/// make at the scene's depth: lambda, the share of it the images show (0 standing, 1 moving as the
-/// filter says at that depth), by least squares robust to slipped tracks. Its pattern (which way
-/// each feature moves) is what tells; its size depends on the scene's depth, unknown at a start
+/// features by little more than the pixel noise (a 0.3 m/s walk: a median of 2.7-3.4 px over
+/// 0.5 s), and a zero-velocity update there took a walk for a stand: the velocity 0.27 m/s off
+/// with a sigma of 0.03 in one image (docs/suite.md). So, given the filter's own velocity
+/// (ExpectedMotion), the displacements are fitted with the flow that translation would make at
+/// the scene's depth: lambda, the share of it the images show (0 standing, 1 moving as the filter
+/// says at that depth), by least squares robust to slipped tracks. Its pattern (which way each
+/// feature moves) is what tells; its size depends on the scene's depth, unknown at a start
 /// (lambda 0.46 in the image where that update fired: the points farther than the 5 m prior).
 /// Where lambda is surely above 0 and lambda times the filter's speed is beyond a stand's sway
 /// (velocity_sigma_mps: a swaying rig translates too, and along the filter's drift as often as
