@@ -181,10 +181,14 @@ std::vector<ParamSpec> makeTable() {
             "detect standing from the images and apply v = 0", dyn),
       field("zero_velocity_window_s", "standing", VI_FIELD(p.filter.zero_velocity.window_s), "s",
             "baseline of the parallax test", dyn, 0.1, 5.0),
-      field("zero_velocity_max_parallax_px", "standing", VI_FIELD(p.filter.zero_velocity.max_parallax_px), "px",
-            "standing below this median de-rotated parallax", dyn, 0.1, 50.0),
+      field(
+          "zero_velocity_max_parallax_px", "standing", VI_FIELD(p.filter.zero_velocity.max_parallax_px), "px",
+          "standing below this median de-rotated parallax, unless the images show the translation the filter estimates",
+          dyn, 0.1, 50.0),
       field("zero_velocity_sigma_mps", "standing", VI_FIELD(p.filter.zero_velocity.velocity_sigma_mps), "m/s",
-            "std-dev of the true velocity while standing (sway)", dyn, 0.001, 1.0),
+            "std-dev of the true velocity while standing (sway); images showing a translation faster than this are no "
+            "stand",
+            dyn, 0.001, 1.0),
       field("zero_velocity_rest_sigma_mps", "standing", VI_FIELD(p.filter.zero_velocity.rest_velocity_sigma_mps), "m/s",
             "the same while the IMU also shows the rig at rest", dyn, 0.001, 1.0),
       field("zero_velocity_min_features", "standing", VI_FIELD(p.filter.zero_velocity.min_features), "count",
