@@ -405,7 +405,7 @@ void EkfSlam::detectStanding(const CameraFrame& frame, bool at_rest, FrameResult
   if (!config_.zero_velocity.enabled) return;
   const Mat3 R_n_c = (state_.x.q_n_s * state_.x.q_s_b).toRotationMatrix() * T_b_c_.R_b_c;
   ExpectedMotion expected;
-  expected.v_n_c = state_.x.q_n_s * state_.x.v_s_b;
+  expected.v_n_b = state_.x.q_n_s * state_.x.v_s_b;
   expected.scene_depth_m = newLandmarkDepth();
   expected.pixel_noise_px = config_.update.pixel_noise_px;
   r->stationary = stationary_.update(frame, R_n_c, camera_, config_.zero_velocity, expected);

@@ -29,6 +29,12 @@ MotionFit fitMotionShare(const std::vector<Eigen::Vector2d>& measured, const std
   std::vector<double> w(measured.size(), 1.0);
   const double k = kHuberSigmas * sigma_px;
   for (int it = 0; it < 4; ++it) {
+    if (it > 0) {  // reweighted by the residuals of the last fit
+      for (size_t i = 0; i < measured.size(); ++i) {
+        const double e = (measured[i] - fit.lambda * predicted[i]).norm();
+        w[i] = e <= k ? 1.0 : k / e;
+      }
+    }
     double num = 0.0, den = 0.0;
     for (size_t i = 0; i < measured.size(); ++i) {
       num += w[i] * measured[i].dot(predicted[i]);
@@ -37,10 +43,6 @@ MotionFit fitMotionShare(const std::vector<Eigen::Vector2d>& measured, const std
     if (!(den > 0.0)) return MotionFit{};
     fit.lambda = num / den;
     fit.sigma = sigma_px / std::sqrt(den);
-    for (size_t i = 0; i < measured.size(); ++i) {
-      const double e = (measured[i] - fit.lambda * predicted[i]).norm();
-      w[i] = e <= k ? 1.0 : k / e;
-    }
   }
   return fit;
 }
@@ -65,7 +67,7 @@ StationaryDetector::Decision StationaryDetector::update(const CameraFrame& frame
     const Mat3 R_now_ref = R_n_c.transpose() * ref.R_n_c;
     const Eigen::Vector2d focal(camera.intrinsics().fx, camera.intrinsics().fy);
     // The filter's translation over the window, in the current camera [m].
-    const Vec3 t_c = expected ? Vec3(R_n_c.transpose() * expected->v_n_c * (frame.timestamp - ref.t)) : Vec3::Zero();
+    const Vec3 t_c = expected ? Vec3(R_n_c.transpose() * expected->v_n_b * (frame.timestamp - ref.t)) : Vec3::Zero();
     std::vector<double> disp;
     std::vector<Eigen::Vector2d> measured, predicted;
     disp.reserve(now.xn.size());
@@ -94,7 +96,7 @@ StationaryDetector::Decision StationaryDetector::update(const CameraFrame& frame
         d.motion_shown_sigma = fit.sigma;
         // The speed the images show (at the scene's depth) must also be beyond a stand's sway:
         // a swaying rig translates too, and along the filter's drift as often as not.
-        d.motion_shown_speed_mps = fit.lambda * expected->v_n_c.norm();
+        d.motion_shown_speed_mps = fit.lambda * expected->v_n_b.norm();
         d.motion_confirmed =
             fit.lambda >= kMotionSigmas * fit.sigma && d.motion_shown_speed_mps > params.velocity_sigma_mps;
       }

@@ -134,7 +134,7 @@ TEST(ZeroVelocity, ASlowWalkTowardsAFarSceneIsNotStandingWhenTheImagesShowTheFil
       std::optional<ExpectedMotion> expected;
       if (filter_v) {
         expected = ExpectedMotion{};
-        expected->v_n_c = *filter_v;
+        expected->v_n_b = *filter_v;
         expected->scene_depth_m = 5.0;  // the prior's depth: the points are 2-4 times as far
         expected->pixel_noise_px = 0.5;
       }
@@ -169,7 +169,7 @@ TEST(ZeroVelocity, ASlowWalkTowardsAFarSceneIsNotStandingWhenTheImagesShowTheFil
   StationaryDetector det;
   StationaryDetector::Decision d;
   ExpectedMotion drifting;
-  drifting.v_n_c = Vec3(0, 0, 0.3);
+  drifting.v_n_b = Vec3(0, 0, 0.3);
   drifting.pixel_noise_px = 0.5;
   for (int k = 0; k <= 28; ++k) {
     CameraFrame f = see(k / 28.0, world, Mat3::Identity(), Vec3::Zero(), cam, rng);

@@ -70,7 +70,9 @@ bool imuAtRest(const std::deque<ImuData>& imu, double t0, double t1, const ZeroV
 /// The translation the filter believes in, to test the images against: a small median parallax
 /// is standing only if the images could have shown that translation and did not.
 struct ExpectedMotion {
-  Vec3 v_n_c = Vec3::Zero();    ///< the camera's estimated velocity in {n} [m/s]
+  /// The body's estimated velocity in {n}, taken as the camera's (the lever arm's omega x p_b_c,
+  /// millimetres over the window, left out) [m/s].
+  Vec3 v_n_b = Vec3::Zero();
   double scene_depth_m = 5.0;   ///< depth of the features along the reference camera's axis [m]
   double pixel_noise_px = 1.0;  ///< std-dev of a tracked feature position [px]
 };
