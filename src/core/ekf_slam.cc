@@ -345,7 +345,7 @@ FrameResult EkfSlam::processFrame(const CameraFrame& camera_frame) {
     r.error = "frame older than the filter state";
     return r;
   }
-  const bool at_rest = imuAtRestBefore(frame.timestamp);
+  const bool at_rest = r.imu_at_rest = imuAtRestBefore(frame.timestamp);
   if (!propagateTo(frame.timestamp)) {
     r.error = "IMU does not reach the frame time yet";
     return r;
@@ -362,7 +362,10 @@ FrameResult EkfSlam::processFrame(const CameraFrame& camera_frame) {
   UpdateParams update = config_.update;
   update.gate_probability = r.gate_probability = outlier_watch_.gateProbability(config_.update);
   r.update = ekfUpdate(state_, known, camera_, T_b_c_, update, last_gyro_ - state_.x.b_g);
-  outlier_watch_.record(r.update, seen_moving_ && !at_rest, frame.timestamp, config_.update);
+  // The gate's watch counts the seconds the camera moved: the images' standing test where it has
+  // decided (a crawl's IMU is as quiet as a stand's, its images are not), else the IMU's.
+  const bool camera_still = r.stationary.decided ? r.stationary.stationary : at_rest;
+  outlier_watch_.record(r.update, seen_moving_ && !camera_still, frame.timestamp, config_.update);
   for (const auto& f : known) last_seen_[f.id] = frame.timestamp;
   if (triangulationActive()) {
     addLandmarksDelayed(fresh, frame.timestamp, defer, &r);

@@ -8,7 +8,9 @@
 // fresh (a dynamic initialization even keeps only the features its alignment fits), and tracks
 // slip as they age, so a few hundred observations of the first images said nothing of the
 // hand-held recording's (its 10 s cut diverged with a 300-observation count). Images at rest do
-// not count: a still camera's tracks do not slip. Real tracks do have outliers (1-6% of the
+// not count: a still camera's tracks do not slip. At rest is the images' standing test where it
+// has decided, else the IMU's (a crawl is as quiet to the IMU as a stand; gtest
+// SensorFaults.TheGateWidensDuringACrawlWhoseImuLooksAtRest). Real tracks do have outliers (1-6% of the
 // observations beyond 99.99% on the hand-held recording), so there the gate stays narrow.
 #pragma once
 
