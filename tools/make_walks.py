@@ -10,12 +10,15 @@ speed) and a small postural sway when standing:
               1.3 m/s from 12 s (the gait's bounce, what tells the scale, at a quarter of a walk's);
   stops       1.3 m/s with stands of 5, 12 and 20 s (about a third of the time standing);
   stairs      walks, climbs a flight of stairs (2.8 m up over 5 m), walks on, comes back down;
-  fast        a brisk walk at 2.4 m/s from the start (a hurried responder; the gait at its largest).
+  fast        a brisk walk at 2.4 m/s from the start (a hurried responder; the gait at its largest);
+  stairwell   from a stand, within a second up a stairwell that turns all the time (a helix of
+              1.6 m radius, 0.75 rad/s, 0.24 m up per second) for 34 s, then the block (the start
+              of OpenVINS's udel_gore trajectory, docs/suite.md).
 
 The files are made by a formula, not recorded: they exercise the starts, stands and climbs that
 held-out recordings have (issue 17), and the suite runs them next to the recorded trajectories.
 
-  make_walks.py OUT_DIR          writes OUT_DIR/{slow_start,crawl,stops,stairs,fast}.txt (100 Hz, z up)
+  make_walks.py OUT_DIR          writes OUT_DIR/{slow_start,crawl,stops,stairs,fast,stairwell}.txt (100 Hz, z up)
 """
 import argparse
 import math
@@ -52,10 +55,22 @@ def block_path(length=30.0, width=12.0, radius=1.5, ds=0.01):
     return np.array(pts)
 
 
-def walk(speed_of_t, duration, height_of_s=None, seed=0):
-    """Samples the block loop at RATE_HZ for the given speed profile [m/s] over time [s]."""
+def stairwell_path(radius=1.6, turns=4.0, block_after=True, ds=0.01):
+    """A helix's ground track (a circle of `radius`, `turns` times round, turning left), then the
+    block loop from the circle's exit: (x, y) every ds metres."""
+    pts = []
+    for a in np.arange(0.0, 2 * math.pi * turns, ds / radius):
+        pts.append(np.array([radius * math.sin(a), radius * (1.0 - math.cos(a))]))
+    if block_after:
+        pts.extend(block_path(ds=ds)[1:])
+    return np.array(pts)
+
+
+def walk(speed_of_t, duration, height_of_s=None, seed=0, path=None):
+    """Samples a path (default: the block loop) at RATE_HZ for the given speed profile [m/s] over
+    time [s]."""
     rng = np.random.default_rng(seed)
-    path = block_path()
+    path = block_path() if path is None else path
     seg = np.linalg.norm(np.diff(path, axis=0), axis=1)
     arclen = np.concatenate([[0.0], np.cumsum(seg)])
     loop = arclen[-1]
@@ -154,13 +169,28 @@ def make(kind):
     if kind == "fast":
         # 2.4 m/s from the first sample: cadence 2.6 steps/s, the bounce and sway at their cap.
         return walk(lambda t: 2.4, 60.0, seed=4)
+    if kind == "stairwell":
+        # Stands 0.2 s, walks off to 1.2 m/s within 0.8 s, round the helix (0.75 rad/s) while
+        # climbing 0.2 m per metre of path (0.24 m/s) for 34 s, then the block.
+        radius, climb_per_m = 1.6, 0.2
+        path = stairwell_path(radius)
+        helix_len = 2 * math.pi * radius * 4.0
+
+        def height(s):
+            return climb_per_m * np.clip(s, 0.0, helix_len)
+
+        def speed(t):
+            a = np.clip((t - 0.2) / 0.8, 0.0, 1.0)
+            return 1.2 * 0.5 * (1 - math.cos(math.pi * a))
+
+        return walk(speed, 90.0, height_of_s=height, seed=6, path=path)
     raise ValueError(kind)
 
 
 def main():
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("out_dir")
-    ap.add_argument("--kinds", default="slow_start,crawl,stops,stairs,fast")
+    ap.add_argument("--kinds", default="slow_start,crawl,stops,stairs,fast,stairwell")
     a = ap.parse_args()
     os.makedirs(a.out_dir, exist_ok=True)
     for kind in a.kinds.split(","):
