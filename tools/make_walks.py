@@ -55,14 +55,13 @@ def block_path(length=30.0, width=12.0, radius=1.5, ds=0.01):
     return np.array(pts)
 
 
-def stairwell_path(radius=1.6, turns=4.0, block_after=True, ds=0.01):
+def stairwell_path(radius, turns, ds=0.01):
     """A helix's ground track (a circle of `radius`, `turns` times round, turning left), then the
     block loop from the circle's exit: (x, y) every ds metres."""
     pts = []
     for a in np.arange(0.0, 2 * math.pi * turns, ds / radius):
         pts.append(np.array([radius * math.sin(a), radius * (1.0 - math.cos(a))]))
-    if block_after:
-        pts.extend(block_path(ds=ds)[1:])
+    pts.extend(block_path(ds=ds)[1:])
     return np.array(pts)
 
 
@@ -172,9 +171,9 @@ def make(kind):
     if kind == "stairwell":
         # Stands 0.2 s, walks off to 1.2 m/s within 0.8 s, round the helix (0.75 rad/s) while
         # climbing 0.2 m per metre of path (0.24 m/s) for 34 s, then the block.
-        radius, climb_per_m = 1.6, 0.2
-        path = stairwell_path(radius)
-        helix_len = 2 * math.pi * radius * 4.0
+        radius, turns, climb_per_m = 1.6, 4.0, 0.2
+        path = stairwell_path(radius, turns)
+        helix_len = 2 * math.pi * radius * turns
 
         def height(s):
             return climb_per_m * np.clip(s, 0.0, helix_len)
