@@ -196,10 +196,11 @@ TEST(RealHandheld, StartedMidWalkInitializesWhileMoving) {
         "started %.1f s in: RMSE %.4f m against %.4f m for the run from the start over the same %d poses: "
         "%.2fx\n",
         start, r->sfm.position_rmse_m, from_start.position_rmse_m, from_start.matched, ratio);
-    // Bounds: from 10 s, 1.5x the run from the start (the issue's target); every cut (the 30 s
-    // one is 2.68x: 0.012 m against 0.0045 m, the run from the start's best seconds) 30% above the
-    // worst measured (docs/initialization.md).
-    EXPECT_LT(ratio, start == 10.0 ? 1.5 : 3.5) << "started " << start << " s in";
+    // Bounds: the cuts the issue names (10 s and 30 s in), 1.5x the run from the start (its
+    // target; measured 0.97x and 1.43x); every other cut 3.5x, above the worst measured (2.41x,
+    // 20 s in; 2.68x for the 30 s cut before the gate watch; docs/initialization.md).
+    const bool named = std::abs(start - 10.0) < 1e-9 || std::abs(start - 30.0) < 1e-9;
+    EXPECT_LT(ratio, named ? 1.5 : 3.5) << "started " << start << " s in";
     log_ratio_sum += std::log(ratio);
     ++cuts;
   }
