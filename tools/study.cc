@@ -79,6 +79,7 @@ struct Options {
   // sees the rig move, unless the IMU shows rest; "immediate": whenever a track is new.
   std::string new_landmarks = "wait";
   bool new_landmarks_given = false;  // "default" keeps the core's choice unless told
+  bool all_runs = false;             // every run's runN.csv and landmarks_runN.csv (else run 0's)
 };
 
 const char* const kUsage =
@@ -123,6 +124,8 @@ Options parse(int argc, char** argv) {
       "depth-prior", po::value(&o.depth_prior),
       "fixed | scene: new inverse-depth landmarks start at INITIAL_DEPTH_M, or at the median depth of the landmarks "
       "seen (default: the core's)")(
+      "all-runs", po::bool_switch(&o.all_runs),
+      "write every run's errors and sigmas (runN.csv, landmarks_runN.csv), not only run 0's")(
       "landmark-entry", po::value(&o.landmark_entry),
       "triangulated | prior: new inverse-depth tracks wait for the baseline that triangulates them, or enter at the "
       "prior depth at once (default: the core's)");
@@ -291,7 +294,8 @@ void writeCsvRow(std::ofstream& f, std::initializer_list<Vec3> vs) {
 }
 
 /// nees_runs.csv: every run's position, orientation and pose NEES per camera time (run0.csv has
-/// run 0's full errors only); shows whether a run-averaged NEES is carried by a few runs.
+/// run 0's full errors, runN.csv run N's with --all-runs); shows whether a run-averaged NEES is
+/// carried by a few runs.
 void writeRunNees(const fs::path& dir, const std::vector<sim::RunResult>& runs) {
   std::ofstream f(dir / "nees_runs.csv");
   f << "t";
@@ -310,11 +314,41 @@ void writeRunNees(const fs::path& dir, const std::vector<sim::RunResult>& runs) 
   }
 }
 
+/// runN.csv: run N's errors (true - estimate) and sigmas per camera time, with the frame's map
+/// and update counts; landmarks_runN.csv: its last estimate of every landmark against the truth.
+void writeRunFiles(const fs::path& dir, const sim::RunResult& run, size_t index, const sim::Scenario& sc) {
+  std::ofstream r(dir / ("run" + std::to_string(index) + ".csv"));
+  r << "t,px,py,pz,ex,ey,ez,tx,ty,tz";
+  writeCsvHeader(r, {"e_p", "s_p", "e_q", "s_q", "e_v", "s_v", "e_ba", "s_ba", "e_bg", "s_bg", "e_p_sb", "s_p_sb",
+                     "e_q_sb", "s_q_sb", "e_p_ns", "s_p_ns", "e_q_ns", "s_q_ns"});
+  r << ",has_s,gamma,landmarks,new_landmarks,rejected,composed,nees_pose,update_ms,stationary,parallax_px,e_td,s_td\n"
+    << std::setprecision(15);
+  for (const auto& m : run.frames) {
+    r << m.t;
+    writeCsvRow(r, {m.p_true, m.p_est, m.p_true});
+    writeCsvRow(r, {m.e_p, m.s_p, m.e_q, m.s_q, m.e_v, m.s_v, m.e_ba, m.s_ba, m.e_bg, m.s_bg});
+    const Vec3 z = Vec3::Zero();
+    if (m.has_s)
+      writeCsvRow(r, {m.e_p_sb, m.s_p_sb, m.e_q_sb, m.s_q_sb, m.e_p_ns, m.s_p_ns, m.e_q_ns, m.s_q_ns});
+    else
+      writeCsvRow(r, {z, z, z, z, z, z, z, z});
+    r << "," << m.has_s << "," << m.gamma << "," << m.landmarks << "," << m.new_landmarks << "," << m.rejected << ","
+      << m.composed << "," << m.nees_pose << "," << m.update_ms << "," << m.stationary << "," << m.parallax_px << ","
+      << m.e_td << "," << m.s_td << "\n";
+  }
+  std::ofstream l(dir / ("landmarks_run" + std::to_string(index) + ".csv"));
+  l << "id,true_x,true_y,true_z,est_x,est_y,est_z\n" << std::setprecision(8);
+  for (const auto& [id, p] : run.landmark_estimates) {
+    const Vec3& t = sim::landmarkOfTrack(id, sc.world).p_n;
+    l << id << "," << t.x() << "," << t.y() << "," << t.z() << "," << p.x() << "," << p.y() << "," << p.z() << "\n";
+  }
+}
+
+/// all_runs: runN.csv for every run, else for run 0 only.
 void writeConfigFiles(const fs::path& dir, const sim::ConsistencySummary& s, const std::vector<sim::RunResult>& runs,
-                      const sim::Scenario& sc) {
+                      const sim::Scenario& sc, bool all_runs) {
   fs::create_directories(dir);
   writeRunNees(dir, runs);
-  const sim::RunResult& run0 = runs.front();  // (a run that never initialized has no frames)
   const eval::NeesBand b3 = eval::neesBand(3, s.runs);
   std::ofstream ts(dir / "timeseries.csv");
   ts << "t,avg_nees_p,avg_nees_q,avg_nees_pose,median_gamma,rms_p,band6_lo,band6_hi,band3_lo,band3_hi";
@@ -327,30 +361,7 @@ void writeConfigFiles(const fs::path& dir, const sim::ConsistencySummary& s, con
     writeCsvRow(ts, {s.axis_p[k], s.axis_v[k], s.axis_q[k], s.axis_ba[k], s.axis_bg[k]});
     ts << "\n";
   }
-  std::ofstream r(dir / "run0.csv");
-  r << "t,px,py,pz,ex,ey,ez,tx,ty,tz";
-  writeCsvHeader(r, {"e_p", "s_p", "e_q", "s_q", "e_v", "s_v", "e_ba", "s_ba", "e_bg", "s_bg", "e_p_sb", "s_p_sb",
-                     "e_q_sb", "s_q_sb", "e_p_ns", "s_p_ns", "e_q_ns", "s_q_ns"});
-  r << ",has_s,gamma,landmarks,new_landmarks,rejected,composed,nees_pose,update_ms,stationary,parallax_px\n"
-    << std::setprecision(15);
-  for (const auto& m : run0.frames) {
-    r << m.t;
-    writeCsvRow(r, {m.p_true, m.p_est, m.p_true});
-    writeCsvRow(r, {m.e_p, m.s_p, m.e_q, m.s_q, m.e_v, m.s_v, m.e_ba, m.s_ba, m.e_bg, m.s_bg});
-    const Vec3 z = Vec3::Zero();
-    if (m.has_s)
-      writeCsvRow(r, {m.e_p_sb, m.s_p_sb, m.e_q_sb, m.s_q_sb, m.e_p_ns, m.s_p_ns, m.e_q_ns, m.s_q_ns});
-    else
-      writeCsvRow(r, {z, z, z, z, z, z, z, z});
-    r << "," << m.has_s << "," << m.gamma << "," << m.landmarks << "," << m.new_landmarks << "," << m.rejected << ","
-      << m.composed << "," << m.nees_pose << "," << m.update_ms << "," << m.stationary << "," << m.parallax_px << "\n";
-  }
-  std::ofstream l(dir / "landmarks_run0.csv");
-  l << "id,true_x,true_y,true_z,est_x,est_y,est_z\n" << std::setprecision(8);
-  for (const auto& [id, p] : run0.landmark_estimates) {
-    const Vec3& t = sim::landmarkOfTrack(id, sc.world).p_n;
-    l << id << "," << t.x() << "," << t.y() << "," << t.z() << "," << p.x() << "," << p.y() << "," << p.z() << "\n";
-  }
+  for (size_t i = 0; i < (all_runs ? runs.size() : 1); ++i) writeRunFiles(dir, runs[i], i, sc);
 }
 
 }  // namespace
@@ -443,7 +454,7 @@ int main(int argc, char** argv) {
   std::vector<sim::ConsistencySummary> sums;
   for (size_t c = 0; c < configs.size(); ++c) {
     sums.push_back(sim::summarize(configs[c].first, results[c]));
-    writeConfigFiles(out / configs[c].first, sums.back(), results[c], sc);
+    writeConfigFiles(out / configs[c].first, sums.back(), results[c], sc, o.all_runs);
   }
 
   // summary.json: each configuration name -> metrics, plus the settings used (non-finite: null).

@@ -131,6 +131,8 @@ RunResult runMonteCarloRun(const Scenario& scenario_in, const EkfSlamConfig& con
     m.composed = rec.result.composed;
     m.stationary = rec.result.zero_velocity_applied;
     m.parallax_px = rec.result.stationary.parallax_px;
+    m.e_td = sc.cam.time_offset_s - s.x.t_d;
+    m.s_td = std::sqrt(std::max(0.0, s.covariance()(idx::kTd, idx::kTd)));
     p_true.push_back(m.p_true);
     p_est.push_back(m.p_est);
     q_err_deg.push_back(m.e_q.norm() * 180.0 / M_PI);

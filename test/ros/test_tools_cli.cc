@@ -12,7 +12,10 @@
 
 #include <opencv2/imgcodecs.hpp>
 
+#include "vi_ekf_slam/core/ekf_slam_config.h"
+
 #include <array>
+#include <cmath>
 #include <cstdio>
 #include <fstream>
 #include <string>
@@ -168,4 +171,32 @@ echo '{"config": {"pose_nees_band": [3.84, 8.63]}, "default": {"ate_position_m":
   // The worst case counts it as failed, not as a NEES.
   EXPECT_NE(o.output.find("| default | 6.10 | 0 | 0.97 | - | 1 |"), std::string::npos) << o.output;
   EXPECT_TRUE(std::ifstream(dir + "/out/suite.md").good());
+}
+
+// The study writes run 0's errors and sigmas (run0.csv) and, with --all-runs, every run's: the file
+// that shows which runs carry a run-averaged NEES. Each row ends with the time offset's error and
+// sigma, which start at the prior's (the simulator's offset is 0, the filter starts at 0).
+TEST(ToolsCli, StudyWritesEveryRunsErrorsWithAllRuns) {
+  const std::string dir = "/tmp/vi_ekf_slam_study_all_runs";
+  ASSERT_EQ(run("rm -rf " + dir).code, 0);
+  const std::string study =
+      std::string(VI_TOOL_STUDY) + " --trajectory builtin --runs 2 --max-duration 2 --configs default";
+  const Outcome one = run(study + " --out " + dir + "/one");
+  ASSERT_EQ(one.code, 0) << one.output;
+  EXPECT_TRUE(std::ifstream(dir + "/one/default/run0.csv").good());
+  EXPECT_FALSE(std::ifstream(dir + "/one/default/run1.csv").good());
+  const Outcome all = run(study + " --all-runs --out " + dir + "/all");
+  ASSERT_EQ(all.code, 0) << all.output;
+  for (const char* name : {"run0.csv", "run1.csv", "landmarks_run1.csv"})
+    EXPECT_TRUE(std::ifstream(dir + "/all/default/" + name).good()) << name;
+  std::ifstream f(dir + "/all/default/run1.csv");
+  std::string header, first;
+  ASSERT_TRUE(std::getline(f, header) && std::getline(f, first));
+  EXPECT_EQ(header.substr(header.size() - 10), ",e_td,s_td");
+  const double s_td = std::stod(first.substr(first.rfind(',') + 1));
+  const std::string without_s = first.substr(0, first.rfind(','));
+  const double e_td = std::stod(without_s.substr(without_s.rfind(',') + 1));
+  const double prior = vi_ekf_slam::InitialUncertainty{}.time_offset_s;
+  EXPECT_NEAR(s_td, prior, 0.1 * prior);  // one image after the start: hardly observed yet
+  EXPECT_LT(std::abs(e_td), 3.0 * s_td);
 }

@@ -35,6 +35,8 @@ struct FrameMetrics {
   bool stationary = false;   ///< the filter detected standing (zero-velocity update applied)
   double parallax_px = 0.0;  ///< the standing test's median de-rotated parallax
   double update_ms = 0.0;    ///< filter time for this frame (propagation + update + init + composition)
+  double e_td = 0.0;         ///< camera-IMU time offset error (true - estimate) [s]
+  double s_td = 0.0;         ///< its 1-sigma [s]
 };
 
 struct RunResult {
