@@ -269,25 +269,31 @@ int EkfSlam::initialize(const DynamicInitResult& aligned, const NavState& regist
   return added;
 }
 
-double EkfSlam::newLandmarkDepth() const {
-  if (!config_.inverse_depth_scene_prior) return config_.inverse_depth_initial_m;
-  const double fallback = scene_depth_hint_m_ > 0.0 ? scene_depth_hint_m_ : config_.inverse_depth_initial_m;
+double EkfSlam::newLandmarkDepth() const { return sceneDepth().depth_m; }
+
+EkfSlam::SceneDepth EkfSlam::sceneDepth() const {
+  SceneDepth out;
+  out.depth_m = config_.inverse_depth_initial_m;
+  if (!config_.inverse_depth_scene_prior) return out;
+  if (scene_depth_hint_m_ > 0.0) out.depth_m = scene_depth_hint_m_;
   const Mat3 R_s_c = state_.x.q_s_b.toRotationMatrix() * T_b_c_.R_b_c;
   const Vec3 p_s_c = state_.x.p_s_b + state_.x.q_s_b * T_b_c_.p_b_c;
   const double max_var = 0.25 * config_.inverse_depth_sigma * config_.inverse_depth_sigma;
-  std::vector<double> depths;
+  std::vector<std::pair<double, int>> depths;
   for (int i = 0; i < state_.numLandmarks(); ++i) {
     const Landmark& lm = state_.landmark(i);
     if (lm.kind != LandmarkKind::kInverseDepth) continue;
     const int c = state_.landmarkIndex(i);
     if (!(state_.covariance()(c + 2, c + 2) < max_var)) continue;
     const double z = (R_s_c.transpose() * (lm.position() - p_s_c)).z();
-    if (z > 0.0 && std::isfinite(z)) depths.push_back(z);
+    if (z > 0.0 && std::isfinite(z)) depths.emplace_back(z, i);
   }
-  if (depths.size() < 10) return fallback;
+  if (depths.size() < 10) return out;
   auto mid = depths.begin() + static_cast<std::ptrdiff_t>(depths.size() / 2);
   std::nth_element(depths.begin(), mid, depths.end());
-  return *mid;
+  out.depth_m = mid->first;
+  out.landmark = mid->second;
+  return out;
 }
 
 bool EkfSlam::initializeLandmark(const FeatureObservation& obs, double inverse_depth_initial_m) {
@@ -455,7 +461,20 @@ std::vector<std::int64_t> EkfSlam::makeRoomInTheMap(double t, int wanted) {
 
 std::vector<std::int64_t> EkfSlam::addLandmarks(const std::vector<FeatureObservation>& fresh, double t) {
   std::vector<std::int64_t> added;
-  const double new_depth_m = fresh.empty() ? 0.0 : newLandmarkDepth();
+  if (fresh.empty()) return added;
+  const SceneDepth scene = sceneDepth();
+  if (scene.landmark >= 0 && config_.landmark_init == LandmarkInitMethod::kInverseDepth) {
+    // At the map's depth, tied to the map's median point (initializeLandmarksAtMapDepth).
+    const auto room = static_cast<size_t>(std::max(0, config_.max_landmarks - state_.numLandmarks()));
+    const std::vector<FeatureObservation> obs(fresh.begin(), fresh.begin() + std::min(room, fresh.size()));
+    for (int k : initializeLandmarksAtMapDepth(state_, obs, scene.landmark, config_.inverse_depth_sigma, camera_,
+                                               T_b_c_, config_.update.pixel_noise_px)) {
+      added.push_back(obs[static_cast<size_t>(k)].id);
+      last_seen_[added.back()] = t;
+    }
+    return added;
+  }
+  const double new_depth_m = scene.depth_m;
   for (const auto& f : fresh) {
     if (state_.numLandmarks() >= config_.max_landmarks) break;
     if (initializeLandmark(f, new_depth_m)) {

@@ -1,5 +1,6 @@
 #include "vi_ekf_slam/core/landmark_initialization.h"
 
+#include <cmath>
 #include <stdexcept>
 
 #include "vi_ekf_slam/core/matrix_utils.h"
@@ -140,4 +141,34 @@ bool initializeLandmarkFixedDepth(FilterState& state, const FeatureObservation& 
   return true;
 }
 
+double inverseDepthInCamera(const FilterState& state, int i, const CameraExtrinsics& T_b_c, Eigen::RowVectorXd* J) {
+  const Mat3 R_s_b = state.x.q_s_b.toRotationMatrix();
+  const Mat3 R_c_s = T_b_c.R_b_c.transpose() * R_s_b.transpose();
+  Mat3 M;
+  const Vec3 p_s_l = state.landmark(i).position(&M);
+  const double z = R_c_s.row(2).dot(p_s_l - state.x.p_s_b - R_s_b * T_b_c.p_b_c);
+  if (J) {
+    // With R_true = Exp(psi) R: d p_c = R_c_s (M dl - dp + [p_s_l - p_s_b]x psi).
+    const Eigen::RowVector3d dz = -R_c_s.row(2) / (z * z);  // d(1 / z) per unit of R_c_s^T d p_c
+    J->setZero(state.dim());
+    J->segment<3>(idx::kP) = -dz;
+    J->segment<3>(idx::kPsi) = dz * skew(p_s_l - state.x.p_s_b);
+    J->segment<3>(state.landmarkIndex(i)) = dz * M;
+  }
+  return 1.0 / z;
+}
+
+std::vector<int> initializeLandmarksAtMapDepth(FilterState& state, const std::vector<FeatureObservation>& obs, int ref,
+                                               double inverse_depth_sigma, const CameraModel& camera,
+                                               const CameraExtrinsics& T_b_c, double pixel_noise_px) {
+  Eigen::RowVectorXd J;
+  const double rho = inverseDepthInCamera(state, ref, T_b_c, &J);
+  if (!(rho > 0.0) || !std::isfinite(rho)) return {};
+  const Eigen::RowVectorXd JP = J * state.covariance();
+  const auto n = static_cast<Eigen::Index>(obs.size());
+  Eigen::MatrixXd Q = Eigen::MatrixXd::Constant(n, n, JP.dot(J));
+  Q.diagonal().array() += inverse_depth_sigma * inverse_depth_sigma;
+  return initializeLandmarksInverseDepthJointly(state, obs, std::vector<double>(static_cast<size_t>(n), 1.0 / rho), Q,
+                                                JP.replicate(n, 1), camera, T_b_c, pixel_noise_px);
+}
 }  // namespace vi_ekf_slam

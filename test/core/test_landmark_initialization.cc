@@ -1,5 +1,7 @@
 #include <gtest/gtest.h>
 
+#include <cmath>
+
 #include "test_helpers.h"
 #include "vi_ekf_slam/core/landmark_initialization.h"
 
@@ -207,5 +209,72 @@ TEST(LandmarkInit, JointInverseDepthsAreFirstOrderPropagationOfTheirJointUncerta
     }
     EXPECT_LT(test::maxAbs(a.covariance() - b.covariance()), 1e-12);
     for (int k = 2; k < 5; ++k) EXPECT_LT((a.landmark(k).l - b.landmark(k).l).norm(), 1e-12);
+  }
+}
+
+// A map point's inverse depth along the current camera's axis and its Jacobian (pose, orientation,
+// the point's own entries; Cartesian and inverse-depth points) against numerical differentiation.
+TEST(LandmarkInit, InverseDepthInCameraJacobianMatchesNumeric) {
+  std::mt19937_64 rng(41);
+  const CameraExtrinsics T = test::forwardCamera();
+  for (const Mechanization mech : {Mechanization::kWorldCentric, Mechanization::kSensorCentric}) {
+    const FilterState s0 = test::randomState(mech, 4, rng);
+    for (int i = 0; i < s0.numLandmarks(); ++i) {
+      Eigen::RowVectorXd J;
+      const double rho = inverseDepthInCamera(s0, i, T, &J);
+      const Vec3 p_c = T.R_b_c.transpose() * (s0.x.q_s_b.conjugate() * (s0.landmarkPosition(i) - s0.x.p_s_b) - T.p_b_c);
+      EXPECT_NEAR(rho, 1.0 / p_c.z(), 1e-12);
+      const Eigen::MatrixXd Jn = test::numericJacobian(
+          [&](const Eigen::VectorXd& d) -> Eigen::VectorXd {
+            FilterState s = s0;
+            s.boxplus(d);
+            return Eigen::VectorXd::Constant(1, inverseDepthInCamera(s, i, T));
+          },
+          s0.dim());
+      EXPECT_LT(test::maxAbs(Jn - Eigen::MatrixXd(J)), 1e-6 * test::maxAbs(J)) << "\n" << Jn - Eigen::MatrixXd(J);
+    }
+  }
+}
+
+// Points entered at the map's depth move with the map's scale: when an observation then tells the
+// reference point's inverse depth 25% larger, theirs follow by as much (a prior independent of the
+// map would stay, and tell the filter the old scale once per point). Their own spread stays.
+TEST(LandmarkInit, PointsAtTheMapDepthMoveWithTheMapsScale) {
+  std::mt19937_64 rng(42);
+  const CameraModel cam = test::paperCamera();
+  const CameraExtrinsics T = test::forwardCamera();
+  FilterState s = test::randomState(Mechanization::kSensorCentric, 4, rng);
+  // The pose known (1e-6 rad and m), the map's points to a few percent of their depth.
+  Eigen::MatrixXd P = 1e-12 * Eigen::MatrixXd::Identity(s.dim(), s.dim());
+  for (int i = 0; i < s.numLandmarks(); ++i)
+    P.block<3, 3>(s.landmarkIndex(i), s.landmarkIndex(i)) = 1e-4 * Mat3::Identity();
+  s.setCovariance(P);
+  const int ref = 1;  // an inverse-depth point
+  const double sigma = 0.5;
+  const std::vector<FeatureObservation> obs{{7, {220.0, 330.0}}, {8, {400.0, 120.0}}};
+  FilterState tied = s, independent = s;
+  ASSERT_EQ(initializeLandmarksAtMapDepth(tied, obs, ref, sigma, cam, T, 1.0), (std::vector<int>{0, 1}));
+  const double rho_ref = inverseDepthInCamera(s, ref, T);
+  InverseDepthParams params;
+  params.initial_depth_m = 1.0 / rho_ref;
+  params.inverse_depth_sigma = sigma;
+  for (const auto& o : obs) ASSERT_TRUE(initializeLandmarkInverseDepth(independent, o, cam, T, params));
+  for (int k = 0; k < 2; ++k) {
+    EXPECT_NEAR(tied.landmark(4 + k).l.z(), rho_ref, 1e-9);
+    EXPECT_NEAR(std::sqrt(tied.covariance()(tied.landmarkIndex(4 + k) + 2, tied.landmarkIndex(4 + k) + 2)), sigma,
+                0.01);
+  }
+  // A (linear) update that measures the reference's 1 / z as 1.25 times the estimate, almost exactly.
+  auto shiftOfNewPoints = [&](const FilterState& f) {
+    Eigen::RowVectorXd H;
+    inverseDepthInCamera(f, ref, T, &H);
+    const Eigen::VectorXd PHt = f.covariance() * H.transpose();
+    const Eigen::VectorXd dx = PHt / (H.dot(PHt) + 1e-12) * (0.25 * rho_ref);
+    return Eigen::Vector2d(dx(f.landmarkIndex(4) + 2), dx(f.landmarkIndex(5) + 2));
+  };
+  const Eigen::Vector2d tied_shift = shiftOfNewPoints(tied), independent_shift = shiftOfNewPoints(independent);
+  for (int k = 0; k < 2; ++k) {
+    EXPECT_NEAR(tied_shift(k), 0.25 * rho_ref, 1e-3 * rho_ref);
+    EXPECT_NEAR(independent_shift(k), 0.0, 1e-3 * rho_ref);
   }
 }

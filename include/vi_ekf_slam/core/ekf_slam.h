@@ -131,6 +131,13 @@ class EkfSlam {
   bool initializeLandmark(const FeatureObservation& obs, double inverse_depth_initial_m);
   /// Prior depth of new inverse-depth landmarks [m] (see inverse_depth_scene_prior).
   double newLandmarkDepth() const;
+  /// The depth new landmarks' prior is centred on [m] and, where it is the map's median, that
+  /// landmark's index (else -1).
+  struct SceneDepth {
+    double depth_m = 0.0;
+    int landmark = -1;
+  };
+  SceneDepth sceneDepth() const;
   bool shouldCompose(int new_landmarks) const;
   /// The estimated speed exceeds zero_velocity.moving_speed_mps by two standard deviations.
   bool confidentlyMoving() const;

@@ -77,7 +77,8 @@ struct EkfSlamConfig {
   /// camera sees whose depth the images already determined (inverse-depth sigma below half the
   /// prior's, at least 10 of them), instead of inverse_depth_initial_m (as ROVIO does). Sigma is
   /// unchanged. A bedroom's points at 0.5-2 m are then inside their own prior; a hallway's stay
-  /// near its median depth.
+  /// near its median depth. The new points' inverse depths are tied to the median point's, so they
+  /// move with the map's scale instead of repeating it (initializeLandmarksAtMapDepth).
   bool inverse_depth_scene_prior = true;
   /// inverse depth, composition after every update: new tracks wait for the baseline that
   /// triangulates them (delayed_landmarks.h) instead of entering at the prior depth at once.

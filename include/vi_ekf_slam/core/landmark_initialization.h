@@ -66,4 +66,19 @@ std::vector<int> initializeLandmarksInverseDepthJointly(FilterState& state, cons
                                                         const Eigen::MatrixXd& C, const CameraModel& camera,
                                                         const CameraExtrinsics& T_b_c, double pixel_noise_px);
 
+/// 1 / z of landmark i, z its depth along the current camera's axis [1/m], and J = d(1 / z)/d(error
+/// state) (1 x dim()).
+double inverseDepthInCamera(const FilterState& state, int i, const CameraExtrinsics& T_b_c,
+                            Eigen::RowVectorXd* J = nullptr);
+
+/// New anchored inverse-depth landmarks at the map's depth: each one's inverse depth is landmark
+/// ref's 1 / z (inverseDepthInCamera) plus an error of its own, inverse_depth_sigma [1/m],
+/// independent of the others'. A prior centred on the estimated map moves with the map's scale;
+/// taken as independent of the map, every such point would tell the filter that scale once more,
+/// and a walk whose scale the motion hardly observes (a crawl) would converge on the map's error.
+/// Returns the indices of the observations that entered, as initializeLandmarksInverseDepthJointly.
+std::vector<int> initializeLandmarksAtMapDepth(FilterState& state, const std::vector<FeatureObservation>& obs, int ref,
+                                               double inverse_depth_sigma, const CameraModel& camera,
+                                               const CameraExtrinsics& T_b_c, double pixel_noise_px);
+
 }  // namespace vi_ekf_slam
