@@ -276,17 +276,15 @@ EkfSlam::SceneDepth EkfSlam::sceneDepth() const {
   out.depth_m = config_.inverse_depth_initial_m;
   if (!config_.inverse_depth_scene_prior) return out;
   if (scene_depth_hint_m_ > 0.0) out.depth_m = scene_depth_hint_m_;
-  const Mat3 R_s_c = state_.x.q_s_b.toRotationMatrix() * T_b_c_.R_b_c;
-  const Vec3 p_s_c = state_.x.p_s_b + state_.x.q_s_b * T_b_c_.p_b_c;
   const double max_var = 0.25 * config_.inverse_depth_sigma * config_.inverse_depth_sigma;
   std::vector<std::pair<double, int>> depths;
   for (int i = 0; i < state_.numLandmarks(); ++i) {
-    const Landmark& lm = state_.landmark(i);
-    if (lm.kind != LandmarkKind::kInverseDepth) continue;
+    if (state_.landmark(i).kind != LandmarkKind::kInverseDepth) continue;
     const int c = state_.landmarkIndex(i);
     if (!(state_.covariance()(c + 2, c + 2) < max_var)) continue;
-    const double z = (R_s_c.transpose() * (lm.position() - p_s_c)).z();
-    if (z > 0.0 && std::isfinite(z)) depths.emplace_back(z, i);
+    // The depth the new points are then tied to (initializeLandmarksAtMapDepth), as it reads it.
+    const double rho = inverseDepthInCamera(state_, i, T_b_c_);
+    if (rho > 0.0 && std::isfinite(1.0 / rho)) depths.emplace_back(1.0 / rho, i);
   }
   if (depths.size() < 10) return out;
   auto mid = depths.begin() + static_cast<std::ptrdiff_t>(depths.size() / 2);
