@@ -15,6 +15,14 @@ speed) and a small postural sway when standing:
               1.6 m radius, 0.75 rad/s, 0.24 m up per second) for 34 s, then the block (the start
               of OpenVINS's udel_gore trajectory, docs/suite.md).
 
+Not in the suite (the default --kinds), for probes of walks the suite does not have (docs/suite.md):
+
+  slow_walk    0.6 m/s throughout (a careful walker: the gait's bounce at half a walk's);
+  start04      0.4 m/s for 10 s, then 1.3 m/s from 12 s (between the crawl and the slow start);
+  stop_and_go  1.3 m/s with a 1 s stop every 7 s (checking doors);
+  small_room   1.0 m/s round a 6 m x 4 m room (a turn every 3-5 s);
+  run          3.5 m/s from the first sample (the gait at its cap).
+
 The files are made by a formula, not recorded: they exercise the starts, stands and climbs that
 held-out recordings have (issue 17), and the suite runs them next to the recorded trajectories.
 
@@ -183,6 +191,19 @@ def make(kind):
             return 1.2 * 0.5 * (1 - math.cos(math.pi * a))
 
         return walk(speed, 90.0, height_of_s=height, seed=6, path=path)
+    if kind == "slow_walk":
+        return walk(lambda t: 0.6, 90.0, seed=13)
+    if kind == "start04":
+        return walk(lambda t: smooth_steps(t, [(0, 0.4), (12, CRUISE_MPS), (90, CRUISE_MPS)]), 90.0, seed=14)
+    if kind == "stop_and_go":
+        knots = [(0, CRUISE_MPS)]
+        for k in range(13):
+            knots += [(7 * k + 5.5, 0.0), (7 * k + 6.5, CRUISE_MPS)]
+        return walk(lambda t: smooth_steps(t, knots), 90.0, seed=11)
+    if kind == "small_room":
+        return walk(lambda t: 1.0, 90.0, seed=12, path=block_path(length=6.0, width=4.0, radius=0.8))
+    if kind == "run":
+        return walk(lambda t: 3.5, 60.0, seed=15)
     raise ValueError(kind)
 
 
