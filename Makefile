@@ -147,12 +147,15 @@ bench: build $(BAG) $(if $(wildcard $(DATA_DIR)/dmvio_handheld/mav0),results/bag
 # table per case and configuration plus the worst case of each configuration; SEED=1,2,3: each seed
 # in SUITE_OUT/seed_N and the worst over all seeds in SUITE_OUT/suite_seeds.md.
 #   make suite [SUITE_RUNS=8] [SEED=1] [SUITE_CONFIGS=a,b] [SUITE_OUT=results/suite] [STUDY_ARGS=...]
+#              [SUITE_WALKS=kind,..|all]  (tools/make_walks.py's kinds; all: with its probe walks)
 SUITE_RUNS    ?= 8
 SUITE_OUT     ?= results/suite
 SUITE_CONFIGS ?=
+SUITE_WALKS   ?=
 suite: build
 	python3 tools/suite.py --study $(BIN)/vi_ekf_slam_study --data $(DATA_DIR) --out $(SUITE_OUT) --runs $(SUITE_RUNS) \
-	  --seed $(SEED) --threads $(JOBS) $(if $(SUITE_CONFIGS),--configs $(SUITE_CONFIGS)) $(if $(STUDY_ARGS),-- $(STUDY_ARGS))
+	  --seed $(SEED) --threads $(JOBS) $(if $(SUITE_CONFIGS),--configs $(SUITE_CONFIGS)) \
+	  $(if $(SUITE_WALKS),--walks $(SUITE_WALKS)) $(if $(STUDY_ARGS),-- $(STUDY_ARGS))
 
 # Starting mid-walk (docs/initialization.md): on the built-in walk, every trajectory in
 # DATA_DIR/trajectories and the walks of tools/make_walks.py, the study from 5 random start times

@@ -15,7 +15,8 @@ speed) and a small postural sway when standing:
               1.6 m radius, 0.75 rad/s, 0.24 m up per second) for 34 s, then the block (the start
               of OpenVINS's udel_gore trajectory, docs/suite.md).
 
-Not in the suite (the default --kinds), for probes of walks the suite does not have (docs/suite.md):
+Not in the suite's default (`--kinds all` adds them; `make suite SUITE_WALKS=all`), probes of walks
+the suite does not have (docs/suite.md):
 
   slow_walk    0.6 m/s throughout (a careful walker: the gait's bounce at half a walk's);
   start04      0.4 m/s for 10 s, then 1.3 m/s from 12 s (between the crawl and the slow start);
@@ -26,17 +27,21 @@ Not in the suite (the default --kinds), for probes of walks the suite does not h
 The files are made by a formula, not recorded: they exercise the starts, stands and climbs that
 held-out recordings have (issue 17), and the suite runs them next to the recorded trajectories.
 
-  make_walks.py OUT_DIR          writes OUT_DIR/{slow_start,crawl,stops,stairs,fast,stairwell}.txt (100 Hz, z up)
+  make_walks.py OUT_DIR [--kinds K1,K2,..|all]
+      writes OUT_DIR/<kind>.txt (100 Hz, z up); by default the suite's six kinds above
 """
 import argparse
 import math
 import os
+import sys
 
 import numpy as np
 
 RATE_HZ = 100.0
 STEP_HZ = 1.9
 CRUISE_MPS = 1.3
+SUITE_KINDS = ["slow_start", "crawl", "stops", "stairs", "fast", "stairwell"]
+PROBE_KINDS = ["slow_walk", "start04", "stop_and_go", "small_room", "run"]
 
 
 def block_path(length=30.0, width=12.0, radius=1.5, ds=0.01):
@@ -210,10 +215,14 @@ def make(kind):
 def main():
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("out_dir")
-    ap.add_argument("--kinds", default="slow_start,crawl,stops,stairs,fast,stairwell")
+    ap.add_argument("--kinds", default=",".join(SUITE_KINDS), help="comma-separated, or all")
     a = ap.parse_args()
+    kinds = SUITE_KINDS + PROBE_KINDS if a.kinds == "all" else a.kinds.split(",")
+    unknown = [k for k in kinds if k not in SUITE_KINDS + PROBE_KINDS]
+    if unknown:
+        sys.exit("make_walks: unknown kind(s) %s; known: %s" % (",".join(unknown), ",".join(SUITE_KINDS + PROBE_KINDS)))
     os.makedirs(a.out_dir, exist_ok=True)
-    for kind in a.kinds.split(","):
+    for kind in kinds:
         t, p, yaw, pitch, roll = make(kind)
         q = quaternion(yaw, pitch, roll)
         path = os.path.join(a.out_dir, kind + ".txt")

@@ -4,11 +4,12 @@ table per trajectory and configuration, with a worst-case row per configuration.
 
 Cases: the built-in hallway walk; the TUM corridor, UDel ARL and EuRoC V1_01 (the non-pedestrian
 check) from DATA_DIR/trajectories, each in 120 s windows; and the walks of tools/make_walks.py
-(a slow start, a crawl, stands, stairs, a fast walk). Any other *.txt in DATA_DIR/trajectories joins the suite
-with one window from its start, so the command runs unchanged on trajectories added there.
+(a slow start, a crawl, stands, stairs, a fast walk, a stairwell; --walks chooses others, or all of
+its kinds). Any other *.txt in DATA_DIR/trajectories joins the suite with one window from its
+start, so the command runs unchanged on trajectories added there.
 
   suite.py --study BIN [--data DIR] [--out results/suite] [--runs 8] [--seed 1 | --seed 1,2,3]
-           [--configs NAME,...] [--threads N] [-- extra study options]
+           [--configs NAME,...] [--walks KIND,...|all] [--threads N] [-- extra study options]
 
 Writes OUT/<case>/ (the study's files), OUT/suite.json and OUT/suite.md, and prints the table.
 With several seeds: OUT/seed_N/ as above for each, and OUT/suite_seeds.{md,json}: every case's
@@ -46,10 +47,15 @@ def trajectory_files(data_dir):
     return sorted(glob.glob(os.path.join(data_dir, "trajectories", "*.txt")))
 
 
-def write_walks(out_dir):
-    """The walks of tools/make_walks.py written into OUT_DIR/walks; returns that folder."""
+def write_walks(out_dir, kinds=""):
+    """The walks of tools/make_walks.py (its default kinds, or KINDS) written into OUT_DIR/walks,
+    and no others; returns that folder."""
     walks = os.path.join(out_dir, "walks")
-    subprocess.run([sys.executable, os.path.join(HERE, "make_walks.py"), walks], check=True, stdout=subprocess.DEVNULL)
+    for old in glob.glob(os.path.join(walks, "*.txt")):
+        os.remove(old)  # a walk of an earlier call with other kinds is not one of this suite's
+    cmd = [sys.executable, os.path.join(HERE, "make_walks.py"), walks] + (["--kinds", kinds] if kinds else [])
+    if subprocess.run(cmd, stdout=subprocess.DEVNULL).returncode != 0:
+        sys.exit("suite: tools/make_walks.py could not write the walks (above)")
     return walks
 
 
@@ -193,6 +199,7 @@ def main():
     add_study_options(ap, out="results/suite", runs=8)
     ap.add_argument("--seed", default="1", help="a seed, or several (1,2,3): each in OUT/seed_N, worst over all")
     ap.add_argument("--configs", default=",".join(DEFAULT_CONFIGS))
+    ap.add_argument("--walks", default="", help="tools/make_walks.py kinds, comma-separated, or all (default: its own)")
     ap.add_argument("--threads", type=int, default=os.cpu_count() or 1)
     ap.add_argument("extra", nargs="*", help="more options for every study call (after --)")
     a = ap.parse_args()
@@ -201,7 +208,7 @@ def main():
     except ValueError:
         sys.exit("suite: --seed takes integers, comma-separated")
 
-    walks = write_walks(a.out)
+    walks = write_walks(a.out, a.walks)
     configs = a.configs.split(",")
     t_start = time.time()
     if len(seeds) == 1:

@@ -171,6 +171,19 @@ echo '{"config": {"pose_nees_band": [3.84, 8.63]}, "default": {"ate_position_m":
   // The worst case counts it as failed, not as a NEES.
   EXPECT_NE(o.output.find("| default | 6.10 | 0 | 0.97 | - | 1 |"), std::string::npos) << o.output;
   EXPECT_TRUE(std::ifstream(dir + "/out/suite.md").good());
+
+  // --walks: the named walks of tools/make_walks.py and no others, also in a folder that held the
+  // default ones; an unknown kind ends the suite before any case runs.
+  const std::string suite = "python3 " + std::string(VI_EKF_SLAM_SOURCE_DIR) + "/tools/suite.py --study " + dir +
+                            "/study.sh --data " + dir + "/data --out " + dir + "/out --runs 2 --configs default";
+  const Outcome w = run(suite + " --walks slow_walk,stairs");
+  EXPECT_NE(w.output.find("| walk_slow_walk | default | 0.200 |"), std::string::npos) << w.output;
+  EXPECT_NE(w.output.find("| walk_stairs | default | 0.200 |"), std::string::npos) << w.output;
+  EXPECT_EQ(w.output.find("walk_crawl"), std::string::npos) << w.output;
+  const Outcome unknown = run(suite + " --walks nope");
+  EXPECT_NE(unknown.code, 0);
+  EXPECT_NE(unknown.output.find("unknown kind(s) nope"), std::string::npos) << unknown.output;
+  EXPECT_EQ(unknown.output.find("| builtin |"), std::string::npos) << unknown.output;
 }
 
 // The study writes run 0's errors and sigmas (run0.csv) and, with --all-runs, every run's: the file
