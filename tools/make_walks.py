@@ -201,9 +201,10 @@ def make(kind):
     if kind == "start04":
         return walk(lambda t: smooth_steps(t, [(0, 0.4), (12, CRUISE_MPS), (90, CRUISE_MPS)]), 90.0, seed=14)
     if kind == "stop_and_go":
+        # Each knot is reached at its time after a 1.5 s ramp: stands from 5.5 to 6.5 s of every 7 s.
         knots = [(0, CRUISE_MPS)]
         for k in range(13):
-            knots += [(7 * k + 5.5, 0.0), (7 * k + 6.5, CRUISE_MPS)]
+            knots += [(7 * k + 5.5, 0.0), (7 * k + 8.0, CRUISE_MPS)]
         return walk(lambda t: smooth_steps(t, knots), 90.0, seed=11)
     if kind == "small_room":
         return walk(lambda t: 1.0, 90.0, seed=12, path=block_path(length=6.0, width=4.0, radius=0.8))
