@@ -218,7 +218,7 @@ def main():
     ap.add_argument("out_dir")
     ap.add_argument("--kinds", default=",".join(SUITE_KINDS), help="comma-separated, or all")
     a = ap.parse_args()
-    kinds = SUITE_KINDS + PROBE_KINDS if a.kinds == "all" else [k for k in a.kinds.split(",") if k.strip()]
+    kinds = SUITE_KINDS + PROBE_KINDS if a.kinds == "all" else [k.strip() for k in a.kinds.split(",") if k.strip()]
     unknown = [k for k in kinds if k not in SUITE_KINDS + PROBE_KINDS]
     if unknown:
         sys.exit("make_walks: unknown kind(s) %s; known: %s" % (",".join(unknown), ",".join(SUITE_KINDS + PROBE_KINDS)))
