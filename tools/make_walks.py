@@ -42,6 +42,7 @@ STEP_HZ = 1.9
 CRUISE_MPS = 1.3
 SUITE_KINDS = ["slow_start", "crawl", "stops", "stairs", "fast", "stairwell"]
 PROBE_KINDS = ["slow_walk", "start04", "stop_and_go", "small_room", "run"]
+KINDS = SUITE_KINDS + PROBE_KINDS  # every kind make() knows
 
 
 def block_path(length=30.0, width=12.0, radius=1.5, ds=0.01):
@@ -218,10 +219,10 @@ def main():
     ap.add_argument("out_dir")
     ap.add_argument("--kinds", default=",".join(SUITE_KINDS), help="comma-separated, or all")
     a = ap.parse_args()
-    kinds = SUITE_KINDS + PROBE_KINDS if a.kinds == "all" else [k.strip() for k in a.kinds.split(",") if k.strip()]
-    unknown = [k for k in kinds if k not in SUITE_KINDS + PROBE_KINDS]
+    kinds = KINDS if a.kinds == "all" else [k.strip() for k in a.kinds.split(",") if k.strip()]
+    unknown = [k for k in kinds if k not in KINDS]
     if unknown:
-        sys.exit("make_walks: unknown kind(s) %s; known: %s" % (",".join(unknown), ",".join(SUITE_KINDS + PROBE_KINDS)))
+        sys.exit("make_walks: unknown kind(s) %s; known: %s" % (",".join(unknown), ",".join(KINDS)))
     os.makedirs(a.out_dir, exist_ok=True)
     for kind in kinds:
         t, p, yaw, pitch, roll = make(kind)

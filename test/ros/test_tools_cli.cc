@@ -159,8 +159,9 @@ echo '{"config": {"pose_nees_band": [3.84, 8.63]}, "default": {"ate_position_m":
  "nees_pose": 6.1, "consistent_fraction": 0.97}}' > "$out/summary.json"
 )";
   ASSERT_EQ(run("chmod +x " + dir + "/study.sh").code, 0);
-  const Outcome o = run("python3 " + std::string(VI_EKF_SLAM_SOURCE_DIR) + "/tools/suite.py --study " + dir +
-                        "/study.sh --data " + dir + "/data --out " + dir + "/out --runs 2 --configs default");
+  const std::string suite = "python3 " + std::string(VI_EKF_SLAM_SOURCE_DIR) + "/tools/suite.py --study " + dir +
+                            "/study.sh --data " + dir + "/data --out " + dir + "/out --runs 2 --configs default";
+  const Outcome o = run(suite);
   EXPECT_EQ(o.code, 1) << o.output;
   EXPECT_NE(o.output.find("| broken@0 | default | - | - | failed (error: " + dir +
                           "/data/trajectories/broken.txt:2: time does not increase) |"),
@@ -174,8 +175,6 @@ echo '{"config": {"pose_nees_band": [3.84, 8.63]}, "default": {"ate_position_m":
 
   // --walks: the named walks of tools/make_walks.py and no others, also in a folder that held the
   // default ones; an unknown kind ends the suite before any case runs.
-  const std::string suite = "python3 " + std::string(VI_EKF_SLAM_SOURCE_DIR) + "/tools/suite.py --study " + dir +
-                            "/study.sh --data " + dir + "/data --out " + dir + "/out --runs 2 --configs default";
   const Outcome w = run(suite + " --walks slow_walk,stairs");
   EXPECT_NE(w.output.find("| walk_slow_walk | default | 0.200 |"), std::string::npos) << w.output;
   EXPECT_NE(w.output.find("| walk_stairs | default | 0.200 |"), std::string::npos) << w.output;
