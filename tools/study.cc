@@ -8,7 +8,7 @@
 //                     [--per-metre 15] [--start-offset S] [--max-duration S] [--max-landmarks N]
 //                     [--imu ASL_IMU_CSV] [--imu-noise datasheet|euroc_mav] [--preset openvins_sim]
 //                     [--inverse-depth INITIAL_DEPTH_M,SIGMA_PER_M] [--update-iterations N]
-//                     [--landmark-entry triangulated|prior]
+//                     [--landmark-entry triangulated|prior] [--imu-biases drawn|none]
 //
 // --preset openvins_sim: OpenVINS's simulator setup on a TUM file (sim/openvins_preset.h).
 // --start-offset / --max-duration: a time window of the trajectory (e.g. start while walking).
@@ -80,6 +80,7 @@ struct Options {
   std::string new_landmarks = "wait";
   bool new_landmarks_given = false;  // "default" keeps the core's choice unless told
   bool all_runs = false;             // every run's runN.csv and landmarks_runN.csv (else run 0's)
+  std::string imu_biases = "drawn";  // drawn | none: the simulated IMU's turn-on biases
 };
 
 const char* const kUsage =
@@ -128,7 +129,10 @@ Options parse(int argc, char** argv) {
       "write every run's errors and sigmas (runN.csv, landmarks_runN.csv), not only run 0's")(
       "landmark-entry", po::value(&o.landmark_entry),
       "triangulated | prior: new inverse-depth tracks wait for the baseline that triangulates them, or enter at the "
-      "prior depth at once (default: the core's)");
+      "prior depth at once (default: the core's)")(
+      "imu-biases", po::value(&o.imu_biases)->default_value(o.imu_biases),
+      "drawn | none: the simulated IMU's biases are drawn from the filter's prior, or zero (a diagnostic: what "
+      "not knowing them costs; the filter keeps its prior)");
   const po::variables_map vm = cli::parse(argc, argv, kUsage,
                                           "Monte-Carlo consistency study (paper Sec. IV-A): M runs of each filter "
                                           "configuration on the built-in hallway walk or a TUM trajectory.",
@@ -167,6 +171,8 @@ Options parse(int argc, char** argv) {
   }
   if (o.init == "dynamic" && !o.imu.empty()) usage("--init dynamic is for synthesized IMU only");
   if (o.new_landmarks != "wait" && o.new_landmarks != "immediate") usage("--new-landmarks must be wait or immediate");
+  if (o.imu_biases != "drawn" && o.imu_biases != "none") usage("--imu-biases must be drawn or none");
+  if (o.imu_biases == "none" && !o.imu.empty()) usage("--imu-biases none is for synthesized IMU only");
   if (!o.inverse_depth.empty() &&
       (std::sscanf(o.inverse_depth.c_str(), "%lf,%lf", &o.inverse_depth_initial_m, &o.inverse_depth_sigma) != 2 ||
        !(o.inverse_depth_initial_m > 0.0) || !(o.inverse_depth_sigma > 0.0))) {
@@ -392,6 +398,7 @@ int main(int argc, char** argv) {
   }
   if (!o.init.empty()) sc.start_at_truth = o.init == "truth";
   if (o.init == "dynamic") sc.dynamic_init = DynamicInitParams();
+  sc.draw_imu_biases = o.imu_biases == "drawn";
   // One scenario per start offset (the same world and sensors, another window of the path).
   std::vector<double> offsets = o.start_offsets;
   if (o.random_starts > 0) {
@@ -467,6 +474,7 @@ int main(int argc, char** argv) {
                             : sc.start_at_truth ? "truth"
                                                 : "prior"},
                   {"imu_noise", o.imu_noise},
+                  {"imu_biases", o.imu_biases},
                   {"start_offsets_s", offsets},
                   {"duration_s", duration},
                   {"world_landmarks", sc.world.size()},

@@ -34,6 +34,10 @@ RunResult runMonteCarloRun(const Scenario& scenario_in, const EkfSlamConfig& con
   Scenario sc = scenario_in;
   sc.imu.initial_accel_bias_sigma_mps2 = config.initial.accel_bias_mps2;
   sc.imu.initial_gyro_bias_sigma_radps = config.initial.gyro_bias_radps;
+  if (!sc.draw_imu_biases) {
+    sc.imu.initial_accel_bias_sigma_mps2 = 0.0;
+    sc.imu.initial_gyro_bias_sigma_radps = 0.0;
+  }
   if (sc.dynamic_init) {
     // The initializer does not estimate the gyro bias: its prior is the one the biases are drawn with.
     sc.dynamic_init = withFilterSettings(*sc.dynamic_init, config);

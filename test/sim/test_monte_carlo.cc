@@ -274,3 +274,31 @@ TEST(MonteCarlo, ADynamicStartMidWalkIsQuickAndConsistent) {
   EXPECT_GT(sum.nees_pose_early, sum.pose_band.lo);
   EXPECT_LT(sum.nees_pose_early, sum.pose_band.hi);
 }
+
+// What a start mid-walk costs over a start from the true state (issue 16 asks 10% in posyaw ATE)
+// is the accelerometer's turn-on bias: a start from the truth is handed it; a window of a walk
+// cannot tell its part across gravity from a tilt (nor can a static start). With an IMU whose
+// biases are zero (the filter keeps its prior) the dynamic start tracks as the truth's start does.
+// Measured with these runs: see docs/initialization.md.
+TEST(MonteCarlo, ADynamicStartLosesToTheTruthOnlyTheImuBiasItCannotSeparateFromTilt) {
+  const sim::Scenario base = sim::hallwayScenario(sim::HallwayParams(), 1.0, 9);
+  const EkfSlamConfig c = simConfig(base);
+  auto posyaw = [&](bool dynamic, bool biases) {
+    std::vector<sim::RunResult> runs;
+    for (int r = 0; r < 12; ++r) {
+      sim::Scenario s = base;
+      if (dynamic) s.dynamic_init = DynamicInitParams();
+      s.start_at_truth = !dynamic;
+      s.draw_imu_biases = biases;
+      const double start = base.trajectory->startTime() + 2.0 + 2.5 * (r % 4);
+      s.trajectory = std::make_shared<sim::TruncatedTrajectory>(base.trajectory, start, start + 20.0);
+      runs.push_back(sim::runMonteCarloRun(s, c, 900 + r));
+    }
+    return sim::summarize("start", runs).ate_posyaw_m;
+  };
+  const double truth = posyaw(false, true), drawn = posyaw(true, true), none = posyaw(true, false);
+  std::printf("posyaw ATE: from the truth %.4f m, dynamic start %.4f m (%.2fx), without IMU biases %.4f m (%.2fx)\n",
+              truth, drawn, drawn / truth, none, none / truth);
+  EXPECT_LT(none, 1.1 * truth);
+  EXPECT_GT(drawn, 1.1 * none);
+}

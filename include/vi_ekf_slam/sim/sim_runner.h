@@ -51,6 +51,9 @@ struct Scenario {
   /// Monte-Carlo runs start from the true state (zero biases, no drawn initial error; the
   /// filter's initial covariance is only its belief), as OpenVINS's simulator does.
   bool start_at_truth = false;
+  /// The simulated IMU's turn-on biases are drawn from the filter's prior (true), or zero (false:
+  /// a diagnostic of what not knowing them costs a start; the filter still has its prior).
+  bool draw_imu_biases = true;
   /// Faults injected while running (none by default).
   std::vector<SensorFault> faults;
   /// Start as the node does: the filter waits for the static initializer (a recent interval at
