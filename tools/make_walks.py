@@ -40,9 +40,6 @@ import numpy as np
 RATE_HZ = 100.0
 STEP_HZ = 1.9
 CRUISE_MPS = 1.3
-SUITE_KINDS = ["slow_start", "crawl", "stops", "stairs", "fast", "stairwell"]
-PROBE_KINDS = ["slow_walk", "start04", "stop_and_go", "small_room", "run"]
-KINDS = SUITE_KINDS + PROBE_KINDS  # every kind make() knows
 
 
 def block_path(length=30.0, width=12.0, radius=1.5, ds=0.01):
@@ -143,75 +140,119 @@ def smooth_steps(t, knots):
     return v
 
 
-def make(kind):
-    if kind == "slow_start":
-        # 0.5 m/s for 8 s, then a slow ramp to cruise speed by 20 s.
-        def speed(t):
-            if t < 8.0:
-                return 0.5
-            a = min(1.0, (t - 8.0) / 12.0)
-            return 0.5 + (CRUISE_MPS - 0.5) * 0.5 * (1 - math.cos(math.pi * a))
-        return walk(speed, 90.0, seed=1)
-    if kind == "crawl":
-        return walk(lambda t: smooth_steps(t, [(0, 0.3), (12, CRUISE_MPS), (90, CRUISE_MPS)]), 90.0, seed=5)
-    if kind == "stops":
-        knots = [(0, 1.3), (15, 0.0), (20, 1.3), (40, 0.0), (52, 1.3), (75, 0.0), (95, 1.3), (120, 1.3)]
-        return walk(lambda t: smooth_steps(t, knots), 120.0, seed=2)
-    if kind == "stairs":
-        # A flight from 20 m to 25 m of the walk (2.8 m up), back down from 78 m to 83 m along the
-        # path; slower on the stairs.
-        up0, up1, down0, down1, rise = 20.0, 25.0, 78.0, 83.0, 2.8
+WALKS = {}  # kind -> function returning (t, positions, yaw, pitch, roll), in the order written
+SUITE_KINDS = []  # the kinds the suite runs by default; the others are probes
 
-        def height(s):
-            return rise * np.clip((s - up0) / (up1 - up0), 0, 1) - rise * np.clip((s - down0) / (down1 - down0), 0, 1)
 
-        # 0.5 m/s on the flights: the speed is a function of the distance, integrated in time
-        # and smoothed over 1 s.
-        def speed_at_s(s):
-            return 0.5 if (up0 <= s <= up1 or down0 <= s <= down1) else CRUISE_MPS
+def walk_kind(suite):
+    """Registers the function as the walk of the kind it is named after (in the suite's default or not)."""
+    def register(fn):
+        WALKS[fn.__name__] = fn
+        if suite:
+            SUITE_KINDS.append(fn.__name__)
+        return fn
 
-        ts = np.arange(0.0, 90.0, 1.0 / RATE_HZ)
-        s = 0.0
-        profile = []
-        for _ in ts:
-            v = speed_at_s(s)
-            profile.append(v)
-            s += v / RATE_HZ
-        profile = np.convolve(profile, np.ones(100) / 100, mode="same")
-        return walk(lambda t: float(np.interp(t, ts, profile)), 90.0, height_of_s=height, seed=3)
-    if kind == "fast":
-        # 2.4 m/s from the first sample: cadence 2.6 steps/s, the bounce and sway at their cap.
-        return walk(lambda t: 2.4, 60.0, seed=4)
-    if kind == "stairwell":
-        # Stands 0.2 s, walks off to 1.2 m/s within 0.8 s, round the helix (0.75 rad/s) while
-        # climbing 0.2 m per metre of path (0.24 m/s) for 34 s, then the block.
-        radius, turns, climb_per_m = 1.6, 4.0, 0.2
-        path = stairwell_path(radius, turns)
-        helix_len = 2 * math.pi * radius * turns
+    return register
 
-        def height(s):
-            return climb_per_m * np.clip(s, 0.0, helix_len)
 
-        def speed(t):
-            a = np.clip((t - 0.2) / 0.8, 0.0, 1.0)
-            return 1.2 * 0.5 * (1 - math.cos(math.pi * a))
+@walk_kind(suite=True)
+def slow_start():
+    # 0.5 m/s for 8 s, then a slow ramp to cruise speed by 20 s.
+    def speed(t):
+        if t < 8.0:
+            return 0.5
+        a = min(1.0, (t - 8.0) / 12.0)
+        return 0.5 + (CRUISE_MPS - 0.5) * 0.5 * (1 - math.cos(math.pi * a))
+    return walk(speed, 90.0, seed=1)
 
-        return walk(speed, 90.0, height_of_s=height, seed=6, path=path)
-    if kind == "slow_walk":
-        return walk(lambda t: 0.6, 90.0, seed=13)
-    if kind == "start04":
-        return walk(lambda t: smooth_steps(t, [(0, 0.4), (12, CRUISE_MPS), (90, CRUISE_MPS)]), 90.0, seed=14)
-    if kind == "stop_and_go":
-        # Each knot is reached at its time after a 1.5 s ramp: stands from 5.5 to 6.5 s of every 7 s.
-        knots = [(0, CRUISE_MPS)]
-        for k in range(13):
-            knots += [(7 * k + 5.5, 0.0), (7 * k + 8.0, CRUISE_MPS)]
-        return walk(lambda t: smooth_steps(t, knots), 90.0, seed=11)
-    if kind == "small_room":
-        return walk(lambda t: 1.0, 90.0, seed=12, path=block_path(length=6.0, width=4.0, radius=0.8))
-    if kind == "run":
-        return walk(lambda t: 3.5, 60.0, seed=15)
-    raise ValueError(kind)
+
+@walk_kind(suite=True)
+def crawl():
+    return walk(lambda t: smooth_steps(t, [(0, 0.3), (12, CRUISE_MPS), (90, CRUISE_MPS)]), 90.0, seed=5)
+
+
+@walk_kind(suite=True)
+def stops():
+    knots = [(0, 1.3), (15, 0.0), (20, 1.3), (40, 0.0), (52, 1.3), (75, 0.0), (95, 1.3), (120, 1.3)]
+    return walk(lambda t: smooth_steps(t, knots), 120.0, seed=2)
+
+
+@walk_kind(suite=True)
+def stairs():
+    # A flight from 20 m to 25 m of the walk (2.8 m up), back down from 78 m to 83 m along the
+    # path; slower on the stairs.
+    up0, up1, down0, down1, rise = 20.0, 25.0, 78.0, 83.0, 2.8
+
+    def height(s):
+        return rise * np.clip((s - up0) / (up1 - up0), 0, 1) - rise * np.clip((s - down0) / (down1 - down0), 0, 1)
+
+    # 0.5 m/s on the flights: the speed is a function of the distance, integrated in time
+    # and smoothed over 1 s.
+    def speed_at_s(s):
+        return 0.5 if (up0 <= s <= up1 or down0 <= s <= down1) else CRUISE_MPS
+
+    ts = np.arange(0.0, 90.0, 1.0 / RATE_HZ)
+    s = 0.0
+    profile = []
+    for _ in ts:
+        v = speed_at_s(s)
+        profile.append(v)
+        s += v / RATE_HZ
+    profile = np.convolve(profile, np.ones(100) / 100, mode="same")
+    return walk(lambda t: float(np.interp(t, ts, profile)), 90.0, height_of_s=height, seed=3)
+
+
+@walk_kind(suite=True)
+def fast():
+    # 2.4 m/s from the first sample: cadence 2.6 steps/s, the bounce and sway at their cap.
+    return walk(lambda t: 2.4, 60.0, seed=4)
+
+
+@walk_kind(suite=True)
+def stairwell():
+    # Stands 0.2 s, walks off to 1.2 m/s within 0.8 s, round the helix (0.75 rad/s) while
+    # climbing 0.2 m per metre of path (0.24 m/s) for 34 s, then the block.
+    radius, turns, climb_per_m = 1.6, 4.0, 0.2
+    path = stairwell_path(radius, turns)
+    helix_len = 2 * math.pi * radius * turns
+
+    def height(s):
+        return climb_per_m * np.clip(s, 0.0, helix_len)
+
+    def speed(t):
+        a = np.clip((t - 0.2) / 0.8, 0.0, 1.0)
+        return 1.2 * 0.5 * (1 - math.cos(math.pi * a))
+
+    return walk(speed, 90.0, height_of_s=height, seed=6, path=path)
+
+
+@walk_kind(suite=False)
+def slow_walk():
+    return walk(lambda t: 0.6, 90.0, seed=13)
+
+
+@walk_kind(suite=False)
+def start04():
+    return walk(lambda t: smooth_steps(t, [(0, 0.4), (12, CRUISE_MPS), (90, CRUISE_MPS)]), 90.0, seed=14)
+
+
+@walk_kind(suite=False)
+def stop_and_go():
+    # Each knot is reached at its time after a 1.5 s ramp: stands from 5.5 to 6.5 s of every 7 s.
+    knots = [(0, CRUISE_MPS)]
+    for k in range(13):
+        knots += [(7 * k + 5.5, 0.0), (7 * k + 8.0, CRUISE_MPS)]
+    return walk(lambda t: smooth_steps(t, knots), 90.0, seed=11)
+
+
+@walk_kind(suite=False)
+def small_room():
+    return walk(lambda t: 1.0, 90.0, seed=12, path=block_path(length=6.0, width=4.0, radius=0.8))
+
+
+@walk_kind(suite=False)
+def run():
+    return walk(lambda t: 3.5, 60.0, seed=15)
 
 
 def main():
@@ -219,13 +260,13 @@ def main():
     ap.add_argument("out_dir")
     ap.add_argument("--kinds", default=",".join(SUITE_KINDS), help="comma-separated, or all")
     a = ap.parse_args()
-    kinds = KINDS if a.kinds == "all" else [k.strip() for k in a.kinds.split(",") if k.strip()]
-    unknown = [k for k in kinds if k not in KINDS]
+    kinds = list(WALKS) if a.kinds == "all" else [k.strip() for k in a.kinds.split(",") if k.strip()]
+    unknown = [k for k in kinds if k not in WALKS]
     if unknown:
-        sys.exit("make_walks: unknown kind(s) %s; known: %s" % (",".join(unknown), ",".join(KINDS)))
+        sys.exit("make_walks: unknown kind(s) %s; known: %s" % (",".join(unknown), ",".join(WALKS)))
     os.makedirs(a.out_dir, exist_ok=True)
     for kind in kinds:
-        t, p, yaw, pitch, roll = make(kind)
+        t, p, yaw, pitch, roll = WALKS[kind]()
         q = quaternion(yaw, pitch, roll)
         path = os.path.join(a.out_dir, kind + ".txt")
         with open(path, "w") as f:
