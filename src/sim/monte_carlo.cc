@@ -32,12 +32,11 @@ NavState drawInitialEstimate(const NavState& truth, const InitialUncertainty& u,
 
 RunResult runMonteCarloRun(const Scenario& scenario_in, const EkfSlamConfig& config, std::uint64_t seed) {
   Scenario sc = scenario_in;
-  sc.imu.initial_accel_bias_sigma_mps2 = config.initial.accel_bias_mps2;
-  sc.imu.initial_gyro_bias_sigma_radps = config.initial.gyro_bias_radps;
-  if (!sc.draw_imu_biases) {
-    sc.imu.initial_accel_bias_sigma_mps2 = 0.0;
-    sc.imu.initial_gyro_bias_sigma_radps = 0.0;
-  }
+  // The IMU's turn-on biases are drawn from the filter's prior, unless the run starts at the true
+  // state (zero biases) or is told to have none.
+  const bool draw_biases = sc.draw_imu_biases && !sc.start_at_truth;
+  sc.imu.initial_accel_bias_sigma_mps2 = draw_biases ? config.initial.accel_bias_mps2 : 0.0;
+  sc.imu.initial_gyro_bias_sigma_radps = draw_biases ? config.initial.gyro_bias_radps : 0.0;
   if (sc.dynamic_init) {
     // The initializer does not estimate the gyro bias: its prior is the one the biases are drawn with.
     sc.dynamic_init = withFilterSettings(*sc.dynamic_init, config);
@@ -47,11 +46,7 @@ RunResult runMonteCarloRun(const Scenario& scenario_in, const EkfSlamConfig& con
   const double t0 = std::max(0.0, sc.trajectory->startTime());
   const NavState truth0 = trueNavState(*sc.trajectory, t0);
   NavState init = drawInitialEstimate(truth0, config.initial, rng);
-  if (sc.start_at_truth) {
-    init = truth0;
-    sc.imu.initial_accel_bias_sigma_mps2 = 0.0;
-    sc.imu.initial_gyro_bias_sigma_radps = 0.0;
-  }
+  if (sc.start_at_truth) init = truth0;
   if (sc.recorded_imu) {
     // A real IMU has the biases it has: start from the true ones (when the ground truth knows
     // them) minus an error drawn from the filter's prior, as the simulated runs do.

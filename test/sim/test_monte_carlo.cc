@@ -36,6 +36,19 @@ sim::ConsistencySummary shortStudy(Mechanization m, LandmarkInitMethod init, Com
   return sim::summarize(toString(m), results);
 }
 
+/// Runs r = 0..runs-1 of sc, each started 2, 4.5, 7 or 9.5 s into the walk and window_s long.
+std::vector<sim::RunResult> startsAlongTheWalk(const sim::Scenario& sc, const EkfSlamConfig& c, int runs,
+                                               double window_s) {
+  std::vector<sim::RunResult> out;
+  for (int r = 0; r < runs; ++r) {
+    sim::Scenario s = sc;
+    const double start = sc.trajectory->startTime() + 2.0 + 2.5 * (r % 4);
+    s.trajectory = std::make_shared<sim::TruncatedTrajectory>(sc.trajectory, start, start + window_s);
+    out.push_back(sim::runMonteCarloRun(s, c, 900 + r));
+  }
+  return out;
+}
+
 }  // namespace
 
 TEST(MonteCarlo, InitialErrorsAreDrawnFromThePrior) {
@@ -257,16 +270,8 @@ TEST(MonteCarlo, AStartAtRestGetsItsLandmarksAtOnce) {
 TEST(MonteCarlo, ADynamicStartMidWalkIsQuickAndConsistent) {
   sim::Scenario sc = sim::hallwayScenario(sim::HallwayParams(), 1.0, 9);
   sc.dynamic_init = DynamicInitParams();
-  const EkfSlamConfig c = simConfig(sc);
-  std::vector<sim::RunResult> runs;
   const int kRuns = 12;
-  for (int r = 0; r < kRuns; ++r) {
-    sim::Scenario s = sc;
-    const double start = sc.trajectory->startTime() + 2.0 + 2.5 * (r % 4);
-    s.trajectory = std::make_shared<sim::TruncatedTrajectory>(sc.trajectory, start, start + 12.0);
-    runs.push_back(sim::runMonteCarloRun(s, c, 900 + r));
-  }
-  const sim::ConsistencySummary sum = sim::summarize("dynamic", runs);
+  const sim::ConsistencySummary sum = sim::summarize("dynamic", startsAlongTheWalk(sc, simConfig(sc), kRuns, 12.0));
   for (double d : sum.init_delay_s) EXPECT_LE(d, 1.5);
   ASSERT_EQ(sum.runs, kRuns);
   std::printf("dynamic start: NEES pose first 10 s %.2f (band [%.2f, %.2f]), posyaw ATE %.3f m\n", sum.nees_pose_early,
@@ -284,17 +289,11 @@ TEST(MonteCarlo, ADynamicStartLosesToTheTruthOnlyTheImuBiasItCannotSeparateFromT
   const sim::Scenario base = sim::hallwayScenario(sim::HallwayParams(), 1.0, 9);
   const EkfSlamConfig c = simConfig(base);
   auto posyaw = [&](bool dynamic, bool biases) {
-    std::vector<sim::RunResult> runs;
-    for (int r = 0; r < 12; ++r) {
-      sim::Scenario s = base;
-      if (dynamic) s.dynamic_init = DynamicInitParams();
-      s.start_at_truth = !dynamic;
-      s.draw_imu_biases = biases;
-      const double start = base.trajectory->startTime() + 2.0 + 2.5 * (r % 4);
-      s.trajectory = std::make_shared<sim::TruncatedTrajectory>(base.trajectory, start, start + 20.0);
-      runs.push_back(sim::runMonteCarloRun(s, c, 900 + r));
-    }
-    return sim::summarize("start", runs).ate_posyaw_m;
+    sim::Scenario s = base;
+    if (dynamic) s.dynamic_init = DynamicInitParams();
+    s.start_at_truth = !dynamic;
+    s.draw_imu_biases = biases;
+    return sim::summarize("start", startsAlongTheWalk(s, c, 12, 20.0)).ate_posyaw_m;
   };
   const double truth = posyaw(false, true), drawn = posyaw(true, true), none = posyaw(true, false);
   std::printf("posyaw ATE: from the truth %.4f m, dynamic start %.4f m (%.2fx), without IMU biases %.4f m (%.2fx)\n",
