@@ -8,7 +8,7 @@
 #include <cmath>
 
 #include "vi_ekf_slam/core/chi_squared.h"
-#include "vi_ekf_slam/core/matrix_utils.h"
+#include "vi_ekf_slam/core/kalman_update.h"
 
 namespace vi_ekf_slam {
 
@@ -21,6 +21,21 @@ struct AcceptedObservation {
   Eigen::Vector2d residual;  ///< measured - h(x) at the current linearization point [px]
   Eigen::Vector2d measured;  ///< [px]
 };
+/// The observation's rows for the one update step: its Jacobian blocks (pose, landmark, time
+/// offset), residual and pixel noise.
+MeasurementRows rowsOf(const AcceptedObservation& a, double r_var) {
+  MeasurementRows m;
+  m.blocks = {{idx::kP, a.J.H_p}, {idx::kPsi, a.J.H_psi}, {a.col, a.J.H_l}, {idx::kTd, a.H_td}};
+  m.residual = a.residual;
+  m.noise_var = r_var;
+  return m;
+}
+std::vector<MeasurementRows> rowsOf(const std::vector<AcceptedObservation>& acc, double r_var) {
+  std::vector<MeasurementRows> rows;
+  rows.reserve(acc.size());
+  for (const auto& a : acc) rows.push_back(rowsOf(a, r_var));
+  return rows;
+}
 /// The iterations stop once the correction changes less than this (max over its entries: m,
 /// rad, m/s, 1/m, s).
 constexpr double kIterationTolerance = 1e-6;
@@ -53,20 +68,11 @@ UpdateResult ekfUpdate(FilterState& state, const std::vector<FeatureObservation>
     a.id = obs.id;
     a.col = state.landmarkIndex(*li);
     a.measured = obs.uv;
-    const int blocks[3] = {idx::kP, idx::kPsi, a.col};
-    const Eigen::Matrix<double, 9, 9> Psub = gatherBlocks<3>(P0, blocks);
-    Eigen::Matrix<double, 2, 9> Hsub;
-    Hsub << a.J.H_p, a.J.H_psi, a.J.H_l;
     // The pixel z seen at image time t_i belongs to the state at t_i + t_d; the filter is at
     // t_i + t_d_est, so z = h(x) + velocity * (t_d - t_d_est).
     if (!predictImageVelocity(state.x, state.landmark(*li), camera, T_b_c, omega_b, &a.H_td)) a.H_td.setZero();
     a.residual = obs.uv - uv - a.H_td * rowTime(obs.uv.y());
-    Eigen::Matrix<double, 1, 9> P_td;  // cross-covariance of t_d with the blocks above
-    P_td << P0.block<1, 3>(idx::kTd, idx::kP), P0.block<1, 3>(idx::kTd, idx::kPsi), P0.block<1, 3>(idx::kTd, a.col);
-    const Eigen::Vector2d HP_td = Hsub * P_td.transpose();
-    Eigen::Matrix2d S = Hsub * Psub * Hsub.transpose() + r_var * Eigen::Matrix2d::Identity();
-    S += a.H_td * P0(idx::kTd, idx::kTd) * a.H_td.transpose() + HP_td * a.H_td.transpose() + a.H_td * HP_td.transpose();
-    const double d2 = a.residual.dot(S.ldlt().solve(a.residual));
+    const double d2 = normalizedInnovation(P0, rowsOf(a, r_var));
     if (!std::isfinite(d2) || d2 > outlier) ++result.outliers;
     if (!std::isfinite(d2) || d2 > gate) {
       result.rejected_ids.push_back(obs.id);
@@ -83,19 +89,17 @@ UpdateResult ekfUpdate(FilterState& state, const std::vector<FeatureObservation>
   //    landmark's first observations depend on the product of its inverse depth and the camera's
   //    motion, both poorly known: one linearization at the prior depth misplaces the correction
   //    between them (false confidence in the velocity); relinearizing at the corrected depth does
-  //    not. The covariance is updated once, with the last K and H. H has 9 non-zero columns per
-  //    observation, so P H^T and H P H^T are assembled block-wise in O(n m) instead of forming H.
+  //    not. The covariance is updated once, with the last K and H (kalman_update.h).
   Eigen::MatrixXd& P = state.mutableCovariance();
   const int n = state.dim();
-  const int m = 2 * result.accepted;
   const MotionState x0 = state.x;
   const std::vector<Landmark> l0 = state.landmarks();
   auto restorePrior = [&] {  // the mean back to x_0 (the iterates only move the mean)
     state.x = x0;
     for (int i = 0; i < state.numLandmarks(); ++i) state.landmark(i) = l0[static_cast<size_t>(i)];
   };
-  Eigen::MatrixXd PHt(n, m), S(m, m), K;
-  Eigen::VectorXd r(m), d = Eigen::VectorXd::Zero(n);
+  Eigen::MatrixXd PHt, S, K;
+  Eigen::VectorXd r, d = Eigen::VectorXd::Zero(n);
   Eigen::LLT<Eigen::MatrixXd> llt;
   const int iterations = std::max(1, params.iterations);
   // Step control: an iterate is kept only while the cost it minimizes, |d|^2_{P0^-1} +
@@ -151,34 +155,16 @@ UpdateResult ekfUpdate(FilterState& state, const std::vector<FeatureObservation>
       acc = std::move(next);
       kept = Iterate{d, PHt, S, K, acc};
     }
-    Eigen::VectorXd Hd(m);
-    for (int j = 0; j < result.accepted; ++j) {
-      const auto& a = acc[static_cast<size_t>(j)];
-      PHt.middleCols<2>(2 * j).noalias() = P.middleCols<3>(idx::kP) * a.J.H_p.transpose();
-      PHt.middleCols<2>(2 * j).noalias() += P.middleCols<3>(idx::kPsi) * a.J.H_psi.transpose();
-      PHt.middleCols<2>(2 * j).noalias() += P.middleCols<3>(a.col) * a.J.H_l.transpose();
-      PHt.middleCols<2>(2 * j).noalias() += P.col(idx::kTd) * a.H_td.transpose();
-      r.segment<2>(2 * j) = a.residual;
-      Hd.segment<2>(2 * j) = a.J.H_p * d.segment<3>(idx::kP) + a.J.H_psi * d.segment<3>(idx::kPsi) +
-                             a.J.H_l * d.segment<3>(a.col) + a.H_td * d(idx::kTd);
-    }
-    for (int i = 0; i < result.accepted; ++i) {
-      const auto& a = acc[static_cast<size_t>(i)];
-      S.middleRows<2>(2 * i).noalias() = a.J.H_p * PHt.middleRows<3>(idx::kP);
-      S.middleRows<2>(2 * i).noalias() += a.J.H_psi * PHt.middleRows<3>(idx::kPsi);
-      S.middleRows<2>(2 * i).noalias() += a.J.H_l * PHt.middleRows<3>(a.col);
-      S.middleRows<2>(2 * i).noalias() += a.H_td * PHt.row(idx::kTd);
-    }
-    S.diagonal().array() += r_var;
-    symmetrize(S);
-    llt.compute(S);
-    if (llt.info() != Eigen::Success) {  // numerically broken P: refuse rather than corrupt it
+    const std::vector<MeasurementRows> rows = rowsOf(acc, r_var);
+    innovationCovariance(P, rows, &PHt, &S);
+    r = stackedResidual(rows);
+    const Eigen::VectorXd Hd = applyJacobian(rows, d);
+    if (!kalmanGain(PHt, S, &llt, &K)) {  // numerically broken P: refuse rather than corrupt it
       restorePrior();
       for (const auto& a : acc) result.invalid_ids.push_back(a.id);
       result.accepted = 0;
       return result;
     }
-    K = llt.solve(PHt.transpose()).transpose();  // P H^T S^-1
     const Eigen::VectorXd lambda = llt.solve(r + Hd);
     const Eigen::VectorXd d_next = PHt * lambda;  // = K (r + H d)
     if (iterations > 1) prior_cost = lambda.dot(S * lambda) - r_var * lambda.squaredNorm();
@@ -195,19 +181,8 @@ UpdateResult ekfUpdate(FilterState& state, const std::vector<FeatureObservation>
   }
   restorePrior();
 
-  // 3) Joseph form (I-KH) P (I-KH)^T + K R K^T, expanded without forming I-KH:
-  //    P - K B^T - B K^T + K S K^T with B = P H^T. It holds for any gain K, so errors in K
-  //    enter P only to second order, as with the textbook Joseph form, at O(n^2 m) cost.
-  //    Written as P + K W^T + W K^T with W = K S / 2 - B, which is one product
-  //    [K W] [W K]^T. The result is symmetric, so only its lower triangle is computed (half
-  //    the flops of the dense product) and mirrored: P stays exactly symmetric.
-  Eigen::MatrixXd KW(n, 2 * m), WK(n, 2 * m);
-  KW.leftCols(m) = K;
-  KW.rightCols(m).noalias() = 0.5 * K * S - PHt;
-  WK.leftCols(m) = KW.rightCols(m);
-  WK.rightCols(m) = K;
-  P.triangularView<Eigen::Lower>() += KW * WK.transpose();
-  P.triangularView<Eigen::StrictlyUpper>() = P.transpose();
+  // 3) The covariance, once, with the last gain (Joseph form).
+  josephUpdate(P, K, S, PHt);
   state.boxplus(d);
   return result;
 }

@@ -4,7 +4,7 @@
 #include <algorithm>
 #include <cmath>
 
-#include "vi_ekf_slam/core/chi_squared.h"
+#include "vi_ekf_slam/core/kalman_update.h"
 
 namespace vi_ekf_slam {
 
@@ -124,23 +124,12 @@ bool imuAtRest(const std::deque<ImuData>& imu, double t0, double t1, const ZeroV
 
 ZeroVelocityResult zeroVelocityUpdate(FilterState& state, const ZeroVelocityParams& params, bool at_rest) {
   const double sigma = at_rest ? params.rest_velocity_sigma_mps : params.velocity_sigma_mps;
-  ZeroVelocityResult res;
-  Eigen::MatrixXd& P = state.mutableCovariance();
-  const Eigen::MatrixXd B = P.middleCols<3>(idx::kV);  // P H^T, H = [0 I 0]
-  Mat3 S = B.middleRows<3>(idx::kV);
-  S.diagonal().array() += sigma * sigma;
-  const Eigen::LLT<Mat3> llt(S);
-  if (llt.info() != Eigen::Success) return res;
-  const Vec3 r = -state.x.v_s_b;  // z - h(x) with z = 0
-  res.nis = r.dot(llt.solve(r));
-  if (!std::isfinite(res.nis) || res.nis > chiSquaredQuantile(params.gate_probability, 3.0)) return res;
-  const Eigen::MatrixXd K = llt.solve(B.transpose()).transpose();
-  const Eigen::VectorXd dx = K * r;
-  P.triangularView<Eigen::Lower>() -= K * B.transpose();
-  P.triangularView<Eigen::StrictlyUpper>() = P.transpose();
-  state.boxplus(dx);
-  res.applied = true;
-  return res;
+  MeasurementRows zero_velocity;  // z = 0 = v_s_b, H = [0 I 0]
+  zero_velocity.blocks = {{idx::kV, Mat3::Identity()}};
+  zero_velocity.residual = -state.x.v_s_b;
+  zero_velocity.noise_var = sigma * sigma;
+  const KalmanUpdateResult r = kalmanUpdate(state, {zero_velocity}, params.gate_probability);
+  return {r.applied, r.nis};
 }
 
 }  // namespace vi_ekf_slam

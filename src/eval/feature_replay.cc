@@ -1,9 +1,10 @@
 #include "vi_ekf_slam/eval/feature_replay.h"
 
 #include <chrono>
+#include <memory>
 #include <stdexcept>
 
-#include "vi_ekf_slam/core/ekf_slam.h"
+#include "vi_ekf_slam/core/vio_pipeline.h"
 #include "vi_ekf_slam/core/frames.h"
 
 namespace vi_ekf_slam::eval {
@@ -33,35 +34,51 @@ EstimatedPose worldPoseFromNav(const NavState& nav) {
   return e;
 }
 
+namespace {
+/// Collects the processed frames' poses.
+class ReplayRecorder : public PipelineListener {
+ public:
+  explicit ReplayRecorder(FeatureReplayResult* out) : out_(out) {}
+  const VioPipeline* pipeline = nullptr;
+  std::chrono::steady_clock::time_point tic;  ///< when the pipeline call began
+
+  void started(const std::string& /*event*/) override { out_->init_time = pipeline->filter().state().timestamp; }
+  void processed(const CameraFrame& /*frame*/, const FrameResult& r) override {
+    if (!r.processed) return;
+    ++out_->frames_processed;
+    out_->rejected_observations += static_cast<int>(r.update.rejected_ids.size());
+    EstimatedPose e = worldPoseFromNav(pipeline->filter().navState());
+    e.processing_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - tic).count();
+    out_->trajectory.push_back(e);
+  }
+
+ private:
+  FeatureReplayResult* out_;
+};
+}  // namespace
+
 FeatureReplayResult replayFeatures(const FeatureTrackData& data, const std::vector<StampedPose>& truth,
                                    const EkfSlamConfig& config, const StaticInitParams& static_params) {
   FeatureReplayResult out;
-  EkfSlam filter(config, CameraModel(data.camera), data.T_b_c);
-  StaticInitializer init(static_params);
-  size_t k = 0;
-  for (; k < data.imu.size() && !filter.initialized(); ++k) {
-    if (auto r = init.addImu(data.imu[k])) {
-      filter.initialize(r->navState());
-      out.init_time = r->timestamp;
-    }
-  }
-  if (!filter.initialized()) throw std::runtime_error("replayFeatures: no static interval to initialize from");
+  ReplayRecorder recorder(&out);
+  PipelineParams params;
+  params.static_init = static_params;
+  params.dynamic_init_enabled = false;
+  VioPipeline pipeline(config, params, CameraModel(data.camera), data.T_b_c, recorder);
+  recorder.pipeline = &pipeline;
+  // The two streams in the order of their stamps, as a recording plays them.
   size_t f = 0;
-  while (f < data.frames.size() && data.frames[f].timestamp <= out.init_time) ++f;
-  for (; k < data.imu.size(); ++k) {
-    filter.addImu(data.imu[k]);
-    // A frame is processed once the IMU reaches its stamp on the IMU clock (stamp + time offset).
-    while (f < data.frames.size() && filter.imuTime(data.frames[f].timestamp) <= data.imu[k].timestamp) {
-      const auto tic = std::chrono::steady_clock::now();
-      const FrameResult r = filter.processFrame(data.frames[f++]);
-      const double ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - tic).count();
-      if (!r.processed) continue;
-      ++out.frames_processed;
-      out.rejected_observations += static_cast<int>(r.update.rejected_ids.size());
-      EstimatedPose e = worldPoseFromNav(filter.navState());
-      e.processing_ms = ms;
-      out.trajectory.push_back(e);
+  for (const ImuData& imu : data.imu) {
+    while (f < data.frames.size() && data.frames[f].timestamp <= imu.timestamp) {
+      const auto frame = std::make_shared<CameraFrame>(data.frames[f++]);
+      recorder.tic = std::chrono::steady_clock::now();
+      pipeline.addFrame({frame->timestamp, [frame](const std::optional<Mat3>&) { return *frame; }});
     }
+    recorder.tic = std::chrono::steady_clock::now();
+    pipeline.addImu(imu);
+  }
+  if (!pipeline.filter().initialized() && out.frames_processed == 0) {
+    throw std::runtime_error("replayFeatures: no static interval to initialize from");
   }
   out.metrics = evaluateRun(out.trajectory, truth);
   return out;

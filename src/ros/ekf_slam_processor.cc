@@ -17,7 +17,8 @@ EkfSlamProcessor::EkfSlamProcessor(const NodeParams& params, OutputSink& sink, c
       tf_(tf),
       calibration_(params.node),
       clock_(params.node.time_jump_reset_s, params.filter.max_imu_gap_s),
-      start_(params),
+      pipeline_(
+          std::make_unique<VioPipeline>(params.filter, pipelineParams(params), static_cast<PipelineListener&>(*this))),
       frames_(params.node.publish_tf, params.node.world_frame, params.node.odom_frame, params.node.base_frame) {
   if (params_.node.tune_allocator) tuneAllocatorForLargeBuffers();
   body_frame_ = params_.node.body_frame;  // "": from the first IMU message
@@ -40,19 +41,20 @@ void EkfSlamProcessor::reportProblem(const std::string& what) {
   last_problem_ = what;
 }
 
-void EkfSlamProcessor::reset(const std::string& reason) {
+void EkfSlamProcessor::startOver(const std::string& reason) {
   ROS_WARN_STREAM("vi_ekf_slam: reset: " << reason);
-  if (filter_) filter_->reset();
   if (tracker_) tracker_->reset();
-  start_.reset();
-  queue_.clear();
   births_.clear();
-  prev_q_n_b_.reset();
   clock_.reset();
   last_processed_t_.reset();
   frames_.filterRestarted();
   ++counters_.resets;
   sink_.event("reset: " + reason);
+}
+
+void EkfSlamProcessor::reset(const std::string& reason) {
+  pipeline_->reset();
+  startOver(reason);
 }
 
 std::string EkfSlamProcessor::reconfigure(const EkfSlamReconfigureConfig& config) {
@@ -61,10 +63,8 @@ std::string EkfSlamProcessor::reconfigure(const EkfSlamReconfigureConfig& config
   if (!err.empty()) return err;
   const Mechanization before = params_.filter.mechanization;
   params_ = next;
-  if (filter_) {
-    std::string e;
-    if (!filter_->setConfig(params_.filter, &e)) return e;
-  }
+  std::string e;
+  if (!pipeline_->setConfig(params_.filter, &e)) return e;
   if (tracker_) tracker_->setParams(params_.tracker);
   if (before != params_.filter.mechanization) {
     ROS_INFO("vi_ekf_slam: mechanization %s -> %s (state and map converted)", toString(before).c_str(),
@@ -82,9 +82,9 @@ void EkfSlamProcessor::cameraInfo(const sensor_msgs::CameraInfo& msg) {
     reportProblem("camera_info ignored: " + err);
     return;
   }
-  if (changed && filter_) {
+  if (changed && pipeline_->hasCamera()) {
     // A new calibration invalidates the map and the tracks: start over.
-    filter_.reset();
+    pipeline_->clearCamera();
     tracker_.reset();
     births_.clear();
     frames_.filterRestarted();
@@ -99,31 +99,19 @@ bool EkfSlamProcessor::cameraReady(const std::string& image_frame) {
     reportProblem(missing);
     return false;
   }
-  if (!filter_) {
+  if (!pipeline_->hasCamera()) {
     try {
       // Tracker and filter share the camera of the tracked (possibly shrunk) image.
       const CameraModel camera(trackingIntrinsics(calibration_.intrinsics(), params_.tracker.max_image_width_px));
-      filter_ = std::make_unique<EkfSlam>(params_.filter, camera, calibration_.extrinsics());
+      pipeline_->setCamera(camera, calibration_.extrinsics());
       tracker_ = std::make_unique<FeatureTracker>(camera, params_.tracker);
-      start_.setCamera(camera, calibration_.extrinsics());
     } catch (const std::exception& e) {
       reportProblem(std::string("cannot start the filter: ") + e.what());
-      filter_.reset();
+      pipeline_->clearCamera();
       return false;
     }
   }
   return true;
-}
-
-void EkfSlamProcessor::tryInitialize(double t_now) {
-  if (!filter_ || filter_->initialized()) return;
-  const std::optional<std::string> started = start_.tryStatic(*filter_, t_now);
-  if (!started) return;
-  prev_q_n_b_.reset();
-  sink_.event(*started);
-  // Tracks start with the filter, as the images that reached the dynamic initializer meanwhile
-  // depend on when they arrived (a live replay and an offline run then differ).
-  if (tracker_) tracker_->reset();
 }
 
 void EkfSlamProcessor::imu(const sensor_msgs::Imu& msg) {
@@ -157,23 +145,17 @@ void EkfSlamProcessor::imu(const sensor_msgs::Imu& msg) {
     ROS_INFO("vi_ekf_slam: IMU frame '%s' (the IMU messages' frame_id%s)", body_frame_.c_str(),
              msg.header.frame_id.empty() ? " is empty: the default" : "");
   }
-  start_.addImu(*d, filter_ && !filter_->initialized());
-  if (filter_) {
-    filter_->addImu(*d);
-    tryInitialize(d->timestamp);
-    publishImuRatePose();
-    processQueue();
-  }
+  pipeline_->addImu(*d);
+  publishImuRatePose();
 }
 
-void EkfSlamProcessor::image(const sensor_msgs::Image& msg) {
+bool EkfSlamProcessor::acceptImageStamp(double t) {
   ++counters_.images_received;
-  const double t = msg.header.stamp.toSec();  // camera clock; the filter maps it to the IMU clock
   switch (clock_.image(t)) {
     case StampVerdict::kStale:
       ++counters_.images_stale;
       reportProblem("image not newer than the previous one dropped");
-      return;
+      return false;
     case StampVerdict::kJumpedBack:
       reset("image time jumped back by " + std::to_string(clock_.lastStepBack()) + " s");
       frames_.forget();
@@ -182,8 +164,14 @@ void EkfSlamProcessor::image(const sensor_msgs::Image& msg) {
     case StampVerdict::kNext:
       break;
   }
-  PendingImage img{t, msg.header, cv::Mat()};
-  const std::string err = toMono8(msg, &img.mono);
+  return true;
+}
+
+void EkfSlamProcessor::image(const sensor_msgs::Image& msg) {
+  const double t = msg.header.stamp.toSec();  // camera clock; the filter maps it to the IMU clock
+  if (!acceptImageStamp(t)) return;
+  auto img = std::make_shared<PendingImage>(PendingImage{t, msg.header, cv::Mat()});
+  const std::string err = toMono8(msg, &img->mono);
   if (!err.empty()) {
     ++counters_.images_bad_encoding;
     reportProblem("image dropped: " + err);
@@ -194,49 +182,76 @@ void EkfSlamProcessor::image(const sensor_msgs::Image& msg) {
     return;
   }
   const CameraIntrinsics& k = calibration_.intrinsics();
-  if (img.mono.cols != k.width || img.mono.rows != k.height) {
+  if (img->mono.cols != k.width || img->mono.rows != k.height) {
     ++counters_.images_no_camera;
-    reportProblem("image size " + std::to_string(img.mono.cols) + "x" + std::to_string(img.mono.rows) +
+    reportProblem("image size " + std::to_string(img->mono.cols) + "x" + std::to_string(img->mono.rows) +
                   " differs from the calibration " + std::to_string(k.width) + "x" + std::to_string(k.height));
     return;
   }
-  if (!filter_->initialized()) {
-    ++counters_.images_before_init;
-    if (params_.dynamic_init_enabled) {
-      tryDynamicInitialize(img);
-    } else {
-      reportProblem("waiting for a static IMU interval to initialize");
-    }
-    return;
-  }
-  if (filter_->imuTime(t) < filter_->state().timestamp) {
-    ++counters_.images_late;
-    reportProblem("image older than the filter state dropped (arrived too late)");
-    return;
-  }
-  queue_.push_back(std::move(img));
-  while (static_cast<int>(queue_.size()) > params_.node.max_image_queue) {
-    queue_.pop_front();
-    ++counters_.images_queue_dropped;
-    reportProblem("image dropped: no IMU data past its stamp");
-  }
-  processQueue();
+  queueFrame(img, [this](PendingImage& i, const std::optional<Mat3>& R_cur_prev) { return trackImage(i, R_cur_prev); });
 }
 
-void EkfSlamProcessor::tryDynamicInitialize(PendingImage& img) {
-  // The tracks it aligns are the tracks the filter goes on with: the same tracker, no gyro seed
-  // (no attitude yet). Frames are on the IMU clock through the configured time offset.
-  CameraFrame frame = trackImage(img, std::nullopt);
-  frame.timestamp = filter_->imuTime(img.t);
-  std::string waiting;
-  const std::optional<std::string> started = start_.tryDynamic(*filter_, frame, img.t, &waiting);
-  if (!started) {
-    if (!waiting.empty()) reportProblem(waiting);
+void EkfSlamProcessor::features(const CameraFrame& frame, const std_msgs::Header& header) {
+  const double t = header.stamp.toSec();
+  if (!acceptImageStamp(t)) return;
+  if (!cameraReady(header.frame_id)) {
+    ++counters_.images_no_camera;
     return;
   }
-  prev_q_n_b_ = start_.dynamicAttitude();
-  last_processed_t_ = img.t;
-  sink_.event(*started);
+  auto img = std::make_shared<PendingImage>(PendingImage{t, header, cv::Mat()});
+  queueFrame(img, [this, frame](PendingImage&, const std::optional<Mat3>&) {
+    last_tracks_ = static_cast<int>(frame.features.size());
+    last_tracker_ms_ = 0.0;
+    return frame;
+  });
+}
+
+void EkfSlamProcessor::queueFrame(const std::shared_ptr<PendingImage>& img,
+                                  std::function<CameraFrame(PendingImage&, const std::optional<Mat3>&)> track) {
+  if (!pipeline_->filter().initialized()) ++counters_.images_before_init;
+  // The pipeline asks for the tracks when it uses the image: before the start at once, after it
+  // once the IMU reaches the image (then with the gyro's rotation since the previous image).
+  pipeline_->addFrame({img->t, [this, img, track = std::move(track)](const std::optional<Mat3>& R_cur_prev) {
+                         frame_tic_ = std::chrono::steady_clock::now();
+                         current_ = img;
+                         return track(*img, R_cur_prev);
+                       }});
+}
+
+void EkfSlamProcessor::started(const std::string& event) {
+  ROS_INFO_STREAM("vi_ekf_slam: " << event);
+  // A moving start used the current image; a start at rest begins the tracks anew, as the images
+  // that reached the dynamic initializer meanwhile depend on when they arrived (a live replay and
+  // an offline run then differ).
+  if (event.rfind("initialized: static", 0) == 0) {
+    if (tracker_) tracker_->reset();
+  } else if (current_) {
+    last_processed_t_ = current_->t;
+  }
+  sink_.event(event);
+}
+
+void EkfSlamProcessor::waiting(const std::string& why) { reportProblem(why); }
+
+void EkfSlamProcessor::dropped(FrameDrop why) {
+  switch (why) {
+    case FrameDrop::kLate:
+      ++counters_.images_late;
+      reportProblem("image older than the filter state dropped (arrived too late)");
+      break;
+    case FrameDrop::kQueueFull:
+      ++counters_.images_queue_dropped;
+      reportProblem("image dropped: no IMU data past its stamp");
+      break;
+  }
+}
+
+void EkfSlamProcessor::lost(const std::string& why) {
+  // Nothing of a lost filter is published: start over (the pipeline re-initializes at rest or
+  // moving), and say why in the events and the diagnostics.
+  ++counters_.divergences;
+  last_lost_ = why;
+  startOver("lost: " + why);
 }
 
 CameraFrame EkfSlamProcessor::trackImage(PendingImage& img, const std::optional<Eigen::Matrix3d>& R_cur_prev) {
@@ -248,40 +263,13 @@ CameraFrame EkfSlamProcessor::trackImage(PendingImage& img, const std::optional<
   return frame;
 }
 
-void EkfSlamProcessor::processQueue() {
-  while (!queue_.empty() && filter_ && filter_->initialized() &&
-         filter_->imuTime(queue_.front().t) <= filter_->latestImuTime()) {
-    PendingImage img = std::move(queue_.front());
-    queue_.pop_front();
-    if (filter_->imuTime(img.t) < filter_->state().timestamp) {
-      ++counters_.images_late;
-      continue;
-    }
-    processImage(img);
-  }
-}
-
-void EkfSlamProcessor::processImage(PendingImage& img) {
-  const auto tic = std::chrono::steady_clock::now();
-  if (!filter_->propagateTo(filter_->imuTime(img.t))) {
-    ++counters_.images_late;
-    return;
-  }
-  // Gyro-predicted camera rotation since the previous image seeds KLT.
-  const Quat q_now = filter_->navState().q_n_b;
-  std::optional<Eigen::Matrix3d> R_cur_prev;
-  if (prev_q_n_b_) {
-    const Mat3 R_b = (q_now.conjugate() * *prev_q_n_b_).toRotationMatrix();
-    const Mat3& R_b_c = calibration_.extrinsics().R_b_c;
-    R_cur_prev = R_b_c.transpose() * R_b * R_b_c;
-  }
-  const CameraFrame frame = trackImage(img, R_cur_prev);
-  const FrameResult r = filter_->processFrame(frame);
-  last_update_ms_ = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - tic).count();
+void EkfSlamProcessor::processed(const CameraFrame& frame, const FrameResult& r) {
+  last_update_ms_ = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - frame_tic_).count();
   if (!r.processed) {
     reportProblem("frame not processed: " + r.error);
     return;
   }
+  const PendingImage& img = *current_;
   ++counters_.images_processed;
   counters_.rejected_observations += static_cast<long>(r.update.rejected_ids.size());
   if (last_processed_t_ && img.t - *last_processed_t_ > params_.node.max_image_gap_s) {
@@ -299,26 +287,13 @@ void EkfSlamProcessor::processImage(PendingImage& img) {
     reportProblem("outlier burst: " + std::to_string(rejected) + " of " + std::to_string(rejected + r.update.accepted) +
                   " observations rejected by the gate");
   }
-  if (!r.lost.empty()) {
-    // Nothing of a lost filter is published: start over (re-initialization at the next static
-    // interval), and say why in the events and the diagnostics.
-    ++counters_.divergences;
-    last_lost_ = r.lost;
-    reset("lost: " + r.lost);
-    return;
-  }
-  const NavState nav = filter_->navState();
-  if (!nav.p_n_b.allFinite() || !nav.v_n_b.allFinite() || !nav.q_n_b.coeffs().allFinite() || !nav.b_g.allFinite() ||
-      !nav.b_a.allFinite() || !nav.cov.allFinite()) {
-    reset("the filter state became non-finite");
-    return;
-  }
-  prev_q_n_b_ = nav.q_n_b;
+  if (!r.lost.empty()) return;  // the pipeline starts over (lost())
   output(img, frame, r);
 }
 
 void EkfSlamProcessor::output(const PendingImage& img, const CameraFrame& frame, const FrameResult& r) {
-  const NavState nav = filter_->navState();
+  const EkfSlam& filter = pipeline_->filter();
+  const NavState nav = filter.navState();
   // Every output is stamped on the IMU clock, at the time of the state it carries (the image
   // stamp plus the estimated camera-IMU time offset).
   ros::Time stamp;
@@ -333,7 +308,7 @@ void EkfSlamProcessor::output(const PendingImage& img, const CameraFrame& frame,
   }
   if (odom && sink_.wantsLandmarks()) {
     std::vector<LandmarkOutput> out;
-    for (const auto& l : filter_->landmarks()) {
+    for (const auto& l : filter.landmarks()) {
       LandmarkOutput lo;
       lo.landmark = l;
       auto it = births_.find(l.id);
@@ -346,7 +321,7 @@ void EkfSlamProcessor::output(const PendingImage& img, const CameraFrame& frame,
     sink_.landmarks(out, stamp);
   }
   // The image's own header (stamp and camera frame), so that it overlays its source image.
-  if (sink_.wantsTracksImage()) sink_.tracksImage(img.header, tracker_->drawTracks(img.mono));
+  if (sink_.wantsTracksImage() && !img.mono.empty()) sink_.tracksImage(img.header, tracker_->drawTracks(img.mono));
   StatusExtras x;
   x.landmark_init = params_.filter.landmark_init;
   x.tracks = last_tracks_;
@@ -354,7 +329,7 @@ void EkfSlamProcessor::output(const PendingImage& img, const CameraFrame& frame,
   x.update_ms = last_update_ms_;
   x.tracker_ms = last_tracker_ms_;
   x.gravity_mps2 = params_.filter.gravity_mps2;
-  vi_ekf_slam::FilterStatus s = toFilterStatus(*filter_, nav, r, x);
+  vi_ekf_slam::FilterStatus s = toFilterStatus(filter, nav, r, x);
   s.header.stamp = stamp;
   s.header.frame_id = frames_.fixedFrame();
   sink_.status(s);
@@ -368,9 +343,9 @@ double EkfSlamProcessor::angularRateVariance() const {
 }
 
 void EkfSlamProcessor::publishImuRatePose() {
-  if (!filter_ || !filter_->initialized() || !sink_.wantsImuOdometry()) return;
+  if (!pipeline_->hasCamera() || !pipeline_->filter().initialized() || !sink_.wantsImuOdometry()) return;
   Vec3 w_b;
-  const std::optional<NavState> nav = filter_->predictedNavState(&w_b);
+  const std::optional<NavState> nav = pipeline_->filter().predictedNavState(&w_b);
   if (!nav) return;
   if (const std::optional<nav_msgs::Odometry> odom = odometryOf(*nav, w_b)) sink_.imuOdometry(*odom);
 }

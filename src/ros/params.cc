@@ -52,6 +52,15 @@ std::string deriveAndValidate(NodeParams& p) {
 
 }  // namespace
 
+PipelineParams pipelineParams(const NodeParams& p) {
+  PipelineParams out;
+  out.static_init = p.static_init;
+  out.dynamic_init_enabled = p.dynamic_init_enabled;
+  out.dynamic_init = withFilterSettings(p.dynamic_init, p.filter);
+  out.max_frame_queue = p.node.max_image_queue;
+  return out;
+}
+
 std::vector<std::string> NodeHandleParams::names() const {
   std::vector<std::string> all, out;
   ros::param::getParamNames(all);

@@ -65,14 +65,15 @@ RunResult runMonteCarloRun(const Scenario& scenario_in, const EkfSlamConfig& con
   Quat q_n_s_true = truth0.q_n_b;
   std::vector<Vec3> p_true, p_est;
   std::vector<double> q_err_deg;
-  bool first_frame = true;
+  // A start of the node's (and a start over after the filter was lost) defines {s} anew.
+  double started_t = sc.dynamic_init ? std::nan("") : t0;
   const FrameCallback cb = [&](EkfSlam& f, FrameRecord& rec) {
-    if (first_frame && sc.dynamic_init) {
+    if (rec.initialized_t != started_t) {
       const TrajectorySample at_init = sc.trajectory->sample(rec.initialized_t);
       p_n_s_true = at_init.p_n_b;
       q_n_s_true = at_init.q_n_b;
+      started_t = rec.initialized_t;
     }
-    first_frame = false;
     FrameMetrics m;
     m.update_ms = rec.filter_ms;
     m.t = rec.t;

@@ -1,13 +1,15 @@
 #include "vi_ekf_slam/sim/sim_runner.h"
 
+#include "vi_ekf_slam/sim/sensor_stream.h"
+
 #include <algorithm>
 #include <chrono>
 #include <cmath>
-#include <deque>
+#include <limits>
+#include <memory>
 #include <optional>
 
 #include "vi_ekf_slam/core/so3.h"
-#include "vi_ekf_slam/core/static_initializer.h"
 
 namespace vi_ekf_slam::sim {
 
@@ -31,6 +33,15 @@ NavState registerToTruth(const NavState& aligned, const NavState& truth, const I
   r.v_n_b = R_z * aligned.v_n_b;
   const double x = n(rng), y = n(rng), z = n(rng);
   r.p_n_b = truth.p_n_b - u.position_m * Vec3(x, y, z);
+  return r;
+}
+
+NavState continueFrom(const NavState& aligned, const NavState& last) {
+  const Quat R_z(Eigen::AngleAxisd(yawBetween(aligned.q_n_b, last.q_n_b), Vec3::UnitZ()));
+  NavState r = aligned;
+  r.q_n_b = (R_z * aligned.q_n_b).normalized();
+  r.v_n_b = R_z * aligned.v_n_b;
+  r.p_n_b = last.p_n_b;
   return r;
 }
 
@@ -69,110 +80,162 @@ void corruptFeatures(CameraFrame& frame, double fraction, std::mt19937_64& rng) 
 
 }  // namespace
 
+PipelineParams simulatedNodeStart(const Scenario& sc, const EkfSlamConfig& config) {
+  PipelineParams p;
+  p.static_init.gravity_mps2 = config.gravity_mps2;
+  p.dynamic_init = sc.dynamic_init ? *sc.dynamic_init : withFilterSettings(DynamicInitParams(), config);
+  // The simulator's queue holds every frame the IMU has not reached (a node drops the oldest
+  // beyond its bound; a simulated stream never falls that far behind).
+  p.max_frame_queue = std::numeric_limits<int>::max();
+  return p;
+}
+
+namespace {
+
+/// The simulator's side of the pipeline: records every frame with the truth at its time.
+class RunRecorder : public PipelineListener {
+ public:
+  RunRecorder(const Scenario& sc, const ImuSequence& imu, VioPipeline*& pipeline, const FrameCallback& callback,
+              bool keep_frames, SimRun* run)
+      : sc_(sc), imu_(imu), pipeline_(pipeline), callback_(callback), keep_frames_(keep_frames), run_(run) {}
+  /// Index of the IMU sample the stream has reached (the truth's biases there).
+  size_t imu_index = 0;
+  /// When the pipeline call that may process frames began (their wall time is counted from it).
+  std::chrono::steady_clock::time_point tic;
+
+  /// The last estimate of a filter that was not lost (a start over continues from it).
+  std::optional<NavState> last_estimate;
+  bool lost_before = false;  ///< the filter was lost since the run began
+
+  void started(const std::string& /*event*/) override { run_->initialized_t = pipeline_->filter().state().timestamp; }
+  void lost(const std::string& /*why*/) override { lost_before = true; }
+  void processed(const CameraFrame& frame, const FrameResult& r) override {
+    EkfSlam& filter = pipeline_->filter();
+    FrameRecord rec;
+    rec.result = r;
+    rec.filter_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - tic).count();
+    // The truth at the time of the estimate (the stamp plus the estimated time offset).
+    rec.t = r.processed ? filter.state().timestamp : frame.timestamp + sc_.cam.time_offset_s;
+    rec.truth = sc_.trajectory->sample(std::min(rec.t, sc_.trajectory->endTime()));
+    const size_t k = std::min(imu_index, imu_.true_accel_bias.size() - 1);
+    rec.true_accel_bias = imu_.true_accel_bias[k];
+    rec.true_gyro_bias = imu_.true_gyro_bias[k];
+    rec.estimate = filter.navState();
+    if (r.processed && r.lost.empty()) last_estimate = rec.estimate;
+    rec.landmarks_in_state = filter.state().numLandmarks();
+    rec.initialized_t = run_->initialized_t;
+    if (callback_) callback_(filter, rec);
+    if (keep_frames_) run_->frames.push_back(std::move(rec));
+  }
+
+ private:
+  const Scenario& sc_;
+  const ImuSequence& imu_;
+  VioPipeline*& pipeline_;
+  const FrameCallback& callback_;
+  bool keep_frames_;
+  SimRun* run_;
+};
+
+}  // namespace
+
+SensorStream::SensorStream(const Scenario& sc, double t0, std::mt19937_64& rng)
+    : sc_(sc),
+      rng_(rng),
+      simulated_(sc.recorded_imu ? ImuSequence() : simulateImu(*sc.trajectory, sc.imu, rng)),
+      imu_(sc.recorded_imu ? sc.recorded_imu.get() : &simulated_),
+      camera_(sc.world, sc.camera, sc.T_b_c, sc.cam),
+      t0_(t0),
+      cam_dt_(1.0 / sc.cam.rate_hz),
+      // The IMU runs on past the last image, as a recorder's does, so that an image whose stamp
+      // plus the time offset estimate is up to 0.1 s later still finds IMU data past it.
+      last_frame_t_(sc.trajectory->endTime() - 0.1) {}
+
+double SensorStream::stamp(double t) const {
+  const double r = sc_.stamp_resolution_s;
+  return r > 0.0 ? std::round(t / r) * r : t;
+}
+
+bool SensorStream::next(Event* e) {
+  *e = Event();
+  while (true) {
+    if (imu_given_) {
+      const double t_imu = imu_->samples[k_ - 1].timestamp;
+      const double t = t0_ + next_frame_ * cam_dt_;
+      if (t <= t_imu + 1e-12 && t <= last_frame_t_) {
+        ++next_frame_;
+        // A dropped image never reaches the tracker, which goes on from the last image it got; a
+        // covered lens shows it nothing to follow, so every track ends there (the points it finds
+        // after are new tracks, as a KLT tracker's are).
+        if (activeFault(sc_.faults, SensorFault::Kind::kImageDropout, t)) continue;
+        CameraFrame frame;
+        if (activeFault(sc_.faults, SensorFault::Kind::kCameraCovered, t)) {
+          camera_.loseTracks();
+        } else {
+          frame = camera_.observe(sc_.trajectory->sample(t), &rng_);
+        }
+        frame.timestamp = stamp(t - sc_.cam.time_offset_s);
+        if (const SensorFault* f = activeFault(sc_.faults, SensorFault::Kind::kOutlierBurst, t)) {
+          corruptFeatures(frame, f->outlier_fraction, rng_);
+        }
+        e->frame = std::move(frame);
+        e->imu_index = k_ - 1;
+        return true;
+      }
+      imu_given_ = false;
+    }
+    if (k_ >= imu_->samples.size()) return false;
+    const ImuData& d = imu_->samples[k_++];
+    imu_given_ = true;
+    if (activeFault(sc_.faults, SensorFault::Kind::kImuGap, d.timestamp)) continue;
+    e->imu = d;
+    e->imu->timestamp = stamp(d.timestamp);
+    e->imu_index = k_ - 1;
+    return true;
+  }
+}
+
 SimRun runSimulation(const Scenario& sc, const EkfSlamConfig& config, const NavState& initial, std::mt19937_64& rng,
                      const FrameCallback& callback, bool keep_frames) {
   const Trajectory& traj = *sc.trajectory;
-  ImuSequence simulated;
-  if (!sc.recorded_imu) simulated = simulateImu(traj, sc.imu, rng);
-  const ImuSequence& imu = sc.recorded_imu ? *sc.recorded_imu : simulated;
-  EkfSlam filter(config, sc.camera, sc.T_b_c);
-  TrackingCamera camera(sc.world, sc.camera, sc.T_b_c, sc.cam);
+  SensorStream stream(sc, initial.timestamp, rng);
+  const ImuSequence& imu = stream.imu();
   SimRun run;
-  std::optional<DynamicInitializer> dynamic;
-  std::optional<StaticInitializer> still;
-  std::optional<StaticInitResult> at_rest;
-  if (sc.dynamic_init) {
-    dynamic.emplace(*sc.dynamic_init, sc.camera, sc.T_b_c);
-    StaticInitParams sp;
-    sp.gravity_mps2 = config.gravity_mps2;
-    still.emplace(sp);
-  } else {
-    filter.initialize(initial);
+  VioPipeline* pipeline_ptr = nullptr;
+  RunRecorder recorder(sc, imu, pipeline_ptr, callback, keep_frames, &run);
+  VioPipeline pipeline(config, simulatedNodeStart(sc, config), sc.camera, sc.T_b_c, recorder);
+  pipeline_ptr = &pipeline;
+  // A start from the initializers knows neither position nor yaw: it is registered to the truth's
+  // with an error drawn from the filter's prior, as a prior start is. A start over after the filter
+  // was lost continues from its last estimate, as the node's odometry does.
+  if (sc.register_to_truth) {
+    pipeline.setRegistration([&](const NavState& s) {
+      if (recorder.lost_before && recorder.last_estimate) return continueFrom(s, *recorder.last_estimate);
+      return registerToTruth(s, trueNavState(traj, s.timestamp), config.initial, rng);
+    });
+  }
+  if (!sc.dynamic_init) {
+    pipeline.initialize(initial);
     run.initialized_t = initial.timestamp;
   }
-  // Until the filter starts, each frame (on the IMU clock through the configured time offset)
-  // starts it from a recent interval at rest or goes to the dynamic initializer, as in the node;
-  // the frames the initializer has seen are not replayed.
-  auto tryInitialization = [&](CameraFrame frame) {
-    frame.timestamp = filter.imuTime(frame.timestamp);
-    if (at_rest && at_rest->usableAt(frame.timestamp)) {
-      const NavState s = at_rest->navState();
-      filter.initialize(registerToTruth(s, trueNavState(traj, s.timestamp), config.initial, rng));
-      run.initialized_t = s.timestamp;
-      return;
-    }
-    dynamic->addFrame(frame);
-    const std::optional<DynamicInitResult> r = dynamic->tryInitialize(nullptr);
-    if (!r) return;
-    filter.initialize(*r, registerToTruth(r->state, trueNavState(traj, r->state.timestamp), config.initial, rng));
-    run.initialized_t = r->state.timestamp;
-  };
-  const double cam_dt = 1.0 / sc.cam.rate_hz;
-  int next_frame = 1;  // the first frame comes one camera period after the start
-  auto frameTime = [&](int k) { return initial.timestamp + k * cam_dt; };
-  // The IMU runs on past the last image, as a recorder's does, so that an image whose stamp plus
-  // the time offset estimate is up to this much later still finds IMU data past it.
-  constexpr double kImuTailS = 0.1;
-  const double last_frame_time = traj.endTime() - kImuTailS;
-  // Frames wait until the IMU reaches their stamp on the filter's IMU clock, as in the node's queue
-  // (with a camera-IMU time offset the stamp is the true time minus the offset).
-  std::deque<CameraFrame> pending;
-  auto processPending = [&](size_t bias_index) {
-    const CameraFrame frame = std::move(pending.front());
-    pending.pop_front();
-    FrameRecord rec;
-    const auto tic = std::chrono::steady_clock::now();
-    rec.result = filter.processFrame(frame);
-    rec.filter_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - tic).count();
-    // The truth at the time of the estimate (the stamp plus the estimated time offset).
-    rec.t = rec.result.processed ? filter.state().timestamp : frame.timestamp + sc.cam.time_offset_s;
-    rec.truth = traj.sample(std::min(rec.t, traj.endTime()));
-    rec.true_accel_bias = imu.true_accel_bias[bias_index];
-    rec.true_gyro_bias = imu.true_gyro_bias[bias_index];
-    rec.estimate = filter.navState();
-    rec.landmarks_in_state = filter.state().numLandmarks();
-    rec.initialized_t = run.initialized_t;
-    if (callback) callback(filter, rec);
-    if (keep_frames) run.frames.push_back(std::move(rec));
-  };
-  for (size_t k = 0; k < imu.samples.size(); ++k) {
-    if (!activeFault(sc.faults, SensorFault::Kind::kImuGap, imu.samples[k].timestamp)) {
-      filter.addImu(imu.samples[k]);
-      if (!filter.initialized()) {
-        dynamic->addImu(imu.samples[k]);
-        if (auto r = still->addImu(imu.samples[k])) at_rest = r;
-      }
-    }
-    while (frameTime(next_frame) <= imu.samples[k].timestamp + 1e-12 && frameTime(next_frame) <= last_frame_time) {
-      const double t = frameTime(next_frame++);
-      // A dropped image never reaches the tracker, which goes on from the last image it got; a
-      // covered lens shows it nothing to follow, so every track ends there (the points it finds
-      // after are new tracks, as a KLT tracker's are).
-      if (activeFault(sc.faults, SensorFault::Kind::kImageDropout, t)) continue;
-      CameraFrame frame;
-      if (activeFault(sc.faults, SensorFault::Kind::kCameraCovered, t)) {
-        camera.loseTracks();
-      } else {
-        frame = camera.observe(traj.sample(t), &rng);
-      }
-      frame.timestamp = t - sc.cam.time_offset_s;
-      if (const SensorFault* f = activeFault(sc.faults, SensorFault::Kind::kOutlierBurst, t)) {
-        corruptFeatures(frame, f->outlier_fraction, rng);
-      }
-      if (filter.initialized()) {
-        pending.push_back(std::move(frame));
-      } else {
-        tryInitialization(std::move(frame));
-      }
-    }
-    while (!pending.empty() && filter.imuTime(pending.front().timestamp) <= filter.latestImuTime() + 1e-12) {
-      processPending(std::min(k, imu.true_accel_bias.size() - 1));
+  SensorStream::Event e;
+  while (stream.next(&e)) {
+    recorder.imu_index = e.imu_index;
+    recorder.tic = std::chrono::steady_clock::now();
+    if (e.imu) {
+      pipeline.addImu(*e.imu);
+    } else {
+      // The camera observed the frame now; the pipeline uses it once the IMU reaches it.
+      auto observed = std::make_shared<CameraFrame>(std::move(*e.frame));
+      pipeline.addFrame({observed->timestamp, [observed](const std::optional<Mat3>&) { return *observed; }});
     }
   }
   // Frames the IMU no longer reaches (a time offset estimate beyond the last sample) are
   // recorded unprocessed, so every run has the same frames.
-  while (!pending.empty()) processPending(imu.true_accel_bias.size() - 1);
-  run.final_landmarks = filter.landmarks();
+  recorder.imu_index = imu.true_accel_bias.size() - 1;
+  recorder.tic = std::chrono::steady_clock::now();
+  pipeline.flush();
+  run.final_landmarks = pipeline.filter().landmarks();
   return run;
 }
 

@@ -135,9 +135,8 @@ struct ZeroVelocityResult {
   double nis = 0.0;  ///< normalized innovation squared (3 dof)
 };
 
-/// EKF update with the pseudo-measurement v_s_b = 0 (zero velocity is zero in every frame),
-/// noise velocity_sigma_mps per axis, gated on its 3-dof innovation; Joseph-equivalent
-/// covariance update P - B S^-1 B^T with B = P H^T (exact for the optimal gain).
+/// EKF update (kalman_update.h) with the pseudo-measurement v_s_b = 0 (zero velocity is zero in
+/// every frame), noise velocity_sigma_mps per axis, gated on its 3-dof innovation.
 /// at_rest (imuAtRest): the IMU shows the rig at rest too, and rest_velocity_sigma_mps is used.
 ZeroVelocityResult zeroVelocityUpdate(FilterState& state, const ZeroVelocityParams& params, bool at_rest);
 

@@ -1,6 +1,6 @@
-// Feeds recorded IMU + feature tracks (e.g. the EqVIO CSV of EuRoC V1_01) to the core directly,
-// without image processing: static initialization, then IMU samples and feature frames in time
-// order. Evaluated against ground truth with the single-run metrics.
+// Feeds recorded IMU + feature tracks (e.g. the EqVIO CSV of EuRoC V1_01) through the core
+// pipeline (VioPipeline, as the node does), without image processing: a start at rest, then IMU
+// samples and feature frames in the order of their stamps. Evaluated against ground truth with the single-run metrics.
 #pragma once
 
 #include "vi_ekf_slam/core/ekf_slam_config.h"

@@ -1,13 +1,15 @@
-// The ROS glue's logic at the message level. It routes IMU, images and camera_info through its
-// parts, each with one job: InputClock (stamps: stale, restarts, gaps), CalibrationSource
-// (intrinsics and extrinsic), FilterStart (static or dynamic initialization), the front end and
-// the core's filter, OutputFrames (REP-105 frames of the outputs) and the status (conversions),
-// counts every bad input, and hands the results to an OutputSink. It owns no NodeHandle, so the
-// live node (EkfSlamRos), the offline bag runner (tools/run_bag) and the gtests drive the very
-// same code.
+// The ROS glue's logic at the message level. It turns messages into the core pipeline's inputs
+// (VioPipeline: queue, clock mapping, start policy, filter) through its parts, each with one job:
+// InputClock (stamps: stale, restarts, gaps), CalibrationSource (intrinsics and extrinsic), the
+// tracker; and the pipeline's results into outputs: OutputFrames (REP-105 frames) and the status
+// (conversions). It counts every bad input and hands the results to an OutputSink. It owns no
+// NodeHandle, so the live node (EkfSlamRos), the offline bag runner (tools/run_bag) and the
+// gtests drive the very same code.
 #pragma once
 
+#include <chrono>
 #include <deque>
+#include <functional>
 #include <memory>
 #include <optional>
 #include <sensor_msgs/CameraInfo.h>
@@ -21,10 +23,8 @@
 #include "vi_ekf_slam/FilterStatus.h"
 #include "vi_ekf_slam/core/ekf_slam.h"
 #include "vi_ekf_slam/core/feature_tracker.h"
-#include "vi_ekf_slam/core/dynamic_initializer.h"
-#include "vi_ekf_slam/core/static_initializer.h"
+#include "vi_ekf_slam/core/vio_pipeline.h"
 #include "vi_ekf_slam/ros/calibration_source.h"
-#include "vi_ekf_slam/ros/filter_start.h"
 #include "vi_ekf_slam/ros/input_clock.h"
 #include "vi_ekf_slam/ros/output_frames.h"
 #include "vi_ekf_slam/ros/params.h"
@@ -69,7 +69,7 @@ class OutputSink {
   virtual void event(const std::string& text) = 0;
 };
 
-class EkfSlamProcessor {
+class EkfSlamProcessor : private PipelineListener {
  public:
   /// tf may be null when params.node.extrinsic_source is "parameters". Throws
   /// std::invalid_argument if the camera calibration file cannot be used.
@@ -77,6 +77,10 @@ class EkfSlamProcessor {
 
   void imu(const sensor_msgs::Imu& msg);
   void image(const sensor_msgs::Image& msg);
+  /// A frame tracked elsewhere (another front end's feature tracks, a simulated camera): the same
+  /// path as an image from the tracker on. header: the image's stamp (camera clock) and frame;
+  /// the features' pixels are in the camera_info's calibration.
+  void features(const CameraFrame& frame, const std_msgs::Header& header);
   void cameraInfo(const sensor_msgs::CameraInfo& msg);
   /// Forgets state, map, tracks and queue; re-initializes at the next static interval.
   void reset(const std::string& reason);
@@ -95,7 +99,7 @@ class EkfSlamProcessor {
   const OutputFrames& outputFrames() const { return frames_; }
   /// Why the filter was last found lost (empty if never).
   const std::string& lastLost() const { return last_lost_; }
-  const EkfSlam* filter() const { return filter_.get(); }
+  const EkfSlam* filter() const { return pipeline_->hasCamera() ? &pipeline_->filter() : nullptr; }
   int lastTracks() const { return last_tracks_; }
   double lastUpdateMs() const { return last_update_ms_; }
 
@@ -111,14 +115,14 @@ class EkfSlamProcessor {
   };
 
   bool cameraReady(const std::string& image_frame);
+  /// The stamp check every frame passes (stale, restart); false: drop it.
+  bool acceptImageStamp(double t);
+  /// Hands a frame to the pipeline: `track` gives its features when the pipeline uses it.
+  void queueFrame(const std::shared_ptr<PendingImage>& img,
+                  std::function<CameraFrame(PendingImage&, const std::optional<Mat3>&)> track);
   /// odom_imu: the filter's state propagated to the latest IMU sample (when the sink wants it).
   void publishImuRatePose();
   double angularRateVariance() const;  ///< of one published angular-rate sample [rad^2/s^2]
-  void tryInitialize(double t_now);
-  /// While not initialized and not at rest: tracks the image and tries the dynamic initializer.
-  void tryDynamicInitialize(PendingImage& img);
-  void processQueue();
-  void processImage(PendingImage& img);
   /// Shrinks img.mono to the tracking resolution (for the tracks image too) and tracks it.
   CameraFrame trackImage(PendingImage& img, const std::optional<Eigen::Matrix3d>& R_cur_prev);
   void output(const PendingImage& img, const CameraFrame& frame, const FrameResult& r);
@@ -126,23 +130,31 @@ class EkfSlamProcessor {
   /// base frame's transform is not known yet or a number is not finite.
   std::optional<nav_msgs::Odometry> odometryOf(const NavState& nav, const Vec3& w_b);
   void reportProblem(const std::string& what);
+  /// Forgets what belongs to one run of the filter (tracks, births, stamps) and says why.
+  void startOver(const std::string& reason);
+
+  // PipelineListener: what the core pipeline decided.
+  void started(const std::string& event) override;
+  void waiting(const std::string& why) override;
+  void dropped(FrameDrop why) override;
+  void processed(const CameraFrame& frame, const FrameResult& r) override;
+  void lost(const std::string& why) override;
 
   NodeParams params_;
   OutputSink& sink_;
   const tf2::BufferCore* tf_;
   CalibrationSource calibration_;
   InputClock clock_;
-  std::unique_ptr<EkfSlam> filter_;
+  std::unique_ptr<VioPipeline> pipeline_;
   std::unique_ptr<FeatureTracker> tracker_;
-  FilterStart start_;
-  std::deque<PendingImage> queue_;
+  std::shared_ptr<PendingImage> current_;  ///< the image the pipeline last asked to track
   std::unordered_map<std::int64_t, Birth> births_;
   Vec3 last_gyro_ = Vec3::Zero();
-  std::optional<Quat> prev_q_n_b_;
   std::optional<double> last_processed_t_;  ///< stamp of the last processed image [s]
   InputCounters counters_;
   int last_tracks_ = 0;
   double last_update_ms_ = 0.0, last_tracker_ms_ = 0.0;
+  std::chrono::steady_clock::time_point frame_tic_;  ///< when the pipeline asked for the current image's tracks
   std::string last_problem_, last_lost_;
   std::string body_frame_;  ///< see bodyFrame()
   OutputFrames frames_;

@@ -13,6 +13,7 @@
 #include "vi_ekf_slam/core/feature_tracker.h"
 #include "vi_ekf_slam/core/dynamic_initializer.h"
 #include "vi_ekf_slam/core/static_initializer.h"
+#include "vi_ekf_slam/core/vio_pipeline.h"
 #include "vi_ekf_slam/ros/output_frames.h"
 
 namespace vi_ekf_slam::glue {
@@ -109,6 +110,8 @@ class YamlParams : public ParamSource {
 std::string loadParams(const ParamSource& source, NodeParams* out);
 /// Every effective value with its unit, one per line (the startup echo).
 std::string describeParams(const NodeParams& p);
+/// The start policy and queue of the core pipeline (VioPipeline) from the node's parameters.
+PipelineParams pipelineParams(const NodeParams& p);
 /// Applies a dynamic_reconfigure update; returns the problems or an empty string.
 std::string applyReconfigure(const EkfSlamReconfigureConfig& c, NodeParams* p);
 /// The dynamic_reconfigure view of the current parameters.

@@ -1,6 +1,6 @@
-// Drives an EkfSlam over a simulated scenario: synthesizes the IMU stream and the camera frames
-// from one trajectory and world, feeds them in time order, and records the estimate and the
-// truth at every camera time.
+// Runs the core pipeline (VioPipeline, the node's own) over a simulated scenario: the sensor
+// stream of one trajectory and world (sensor_stream.h) goes in, and the estimate and the truth
+// come out at every camera time.
 #pragma once
 
 #include <cmath>
@@ -13,6 +13,7 @@
 
 #include "vi_ekf_slam/core/dynamic_initializer.h"
 #include "vi_ekf_slam/core/ekf_slam.h"
+#include "vi_ekf_slam/core/vio_pipeline.h"
 #include "vi_ekf_slam/sim/camera_simulator.h"
 #include "vi_ekf_slam/sim/imu_simulator.h"
 #include "vi_ekf_slam/sim/landmark_world.h"
@@ -62,6 +63,12 @@ struct Scenario {
   /// registered to the truth's position and yaw (what it cannot know) with an error drawn from
   /// the filter's prior, as a prior start is.
   std::optional<DynamicInitParams> dynamic_init;
+  /// Such a start is registered to the truth (false: the filter keeps the initializer's own
+  /// position and yaw, as the node does).
+  bool register_to_truth = true;
+  /// The sensors' stamps are rounded to this, as a recorder's clock keeps them (1e-9: ROS time);
+  /// 0: exact [s].
+  double stamp_resolution_s = 0.0;
 };
 
 /// One camera time of a run.
@@ -73,7 +80,8 @@ struct FrameRecord {
   NavState estimate;
   FrameResult result;
   int landmarks_in_state = 0;
-  double filter_ms = 0.0;      ///< wall time of processFrame (propagation, update, new landmarks, composition)
+  double filter_ms = 0.0;      ///< wall time of the pipeline on the IMU sample that released the frame (propagation,
+                               ///< update, new landmarks, composition)
   double initialized_t = 0.0;  ///< when the filter was (last) initialized [s]
 };
 
@@ -94,6 +102,11 @@ using FrameCallback = std::function<void(EkfSlam&, FrameRecord&)>;
 SimRun runSimulation(const Scenario& scenario, const EkfSlamConfig& config, const NavState& initial,
                      std::mt19937_64& rng, const FrameCallback& callback = nullptr, bool keep_frames = true);
 
+/// The node's start policy for a simulated run: its static initializer at the filter's gravity, the
+/// scenario's dynamic initializer (its defaults with the filter's settings without one), and a
+/// queue that holds every frame.
+PipelineParams simulatedNodeStart(const Scenario& sc, const EkfSlamConfig& config);
+
 /// The true navigation state at time t (zero biases) for initialization.
 NavState trueNavState(const Trajectory& trajectory, double t);
 
@@ -103,5 +116,9 @@ NavState trueNavState(const Trajectory& trajectory, double t);
 /// biases stay the estimate's.
 NavState registerToTruth(const NavState& aligned, const NavState& truth, const InitialUncertainty& u,
                          std::mt19937_64& rng);
+
+/// A start over after the filter was lost, placed where the last estimate was (its position and
+/// yaw), as the node keeps its odometry continuous.
+NavState continueFrom(const NavState& aligned, const NavState& last);
 
 }  // namespace vi_ekf_slam::sim

@@ -1,0 +1,124 @@
+// From sensor samples to estimates: the one path that the ROS node (EkfSlamProcessor), the
+// offline bag runner and the simulator's runner all drive. It owns the filter, the queue of
+// frames waiting for the IMU to reach them, the camera-to-IMU clock mapping, and the start
+// policy: at rest (StaticInitializer), moving (DynamicInitializer), again after a reset or when
+// the filter is lost. What it decides it tells a PipelineListener; it never logs or publishes.
+#pragma once
+
+#include <deque>
+#include <functional>
+#include <memory>
+#include <optional>
+#include <string>
+
+#include "vi_ekf_slam/core/dynamic_initializer.h"
+#include "vi_ekf_slam/core/ekf_slam.h"
+#include "vi_ekf_slam/core/static_initializer.h"
+
+namespace vi_ekf_slam {
+
+struct PipelineParams {
+  StaticInitParams static_init;
+  bool dynamic_init_enabled = true;  ///< also start while moving (visual-inertial alignment)
+  DynamicInitParams dynamic_init;    ///< with the filter's settings (withFilterSettings)
+  int max_frame_queue = 20;          ///< frames waiting for the IMU beyond this are dropped [count]
+};
+
+/// A camera frame on its way to the filter: its stamp and how to get its features. The features
+/// are asked for once, when the frame is used, with the camera's rotation since the previous
+/// frame predicted from the gyro (none before the start): the node tracks the image then, the
+/// simulator returns the frame it observed.
+struct QueuedFrame {
+  double t = 0.0;  ///< stamp on the camera clock [s]
+  std::function<CameraFrame(const std::optional<Mat3>& R_cur_prev)> features;
+};
+
+enum class FrameDrop {
+  kLate,       ///< older than the filter's state (it arrived after the IMU had moved past it)
+  kQueueFull,  ///< no IMU past its stamp while max_frame_queue newer frames waited
+};
+
+/// What the pipeline tells its driver. Every method has a default that ignores it.
+class PipelineListener {
+ public:
+  virtual ~PipelineListener() = default;
+  /// The filter started; `event` says how (static or dynamic, with the alignment's figures).
+  virtual void started(const std::string& /*event*/) {}
+  /// Still waiting to start, and why.
+  virtual void waiting(const std::string& /*why*/) {}
+  virtual void dropped(FrameDrop /*why*/) {}
+  /// A frame went through the filter (r.processed false: it could not, r.error says why).
+  virtual void processed(const CameraFrame& /*frame*/, const FrameResult& /*r*/) {}
+  /// The filter was lost (or its state became non-finite) and the pipeline started over.
+  virtual void lost(const std::string& /*why*/) {}
+};
+
+class VioPipeline {
+ public:
+  /// The rest test runs from the first IMU sample on; the filter waits for setCamera().
+  VioPipeline(const EkfSlamConfig& config, const PipelineParams& params, PipelineListener& listener);
+  /// The same with the camera known from the start.
+  VioPipeline(const EkfSlamConfig& config, const PipelineParams& params, const CameraModel& camera,
+              const CameraExtrinsics& T_b_c, PipelineListener& listener);
+
+  /// The camera (once its calibration and extrinsic are known, or when they change): a new filter
+  /// and moving start for it; the filter starts with the camera's next frame. Throws
+  /// std::invalid_argument if the filter's configuration or the camera is impossible.
+  void setCamera(const CameraModel& camera, const CameraExtrinsics& T_b_c);
+  bool hasCamera() const { return filter_ != nullptr; }
+  /// Forgets the camera and its filter (a calibration that changed): nothing runs until setCamera().
+  void clearCamera();
+  /// A new filter configuration, for the running filter (false and *error: refused) and the next.
+  bool setConfig(const EkfSlamConfig& config, std::string* error);
+
+  /// One IMU sample: offered to the start policy and, once the first frame has arrived, buffered
+  /// for the filter; every queued frame it reaches is processed.
+  void addImu(const ImuData& imu);
+  /// One camera frame: before the start it goes to the dynamic initializer, after it to the queue.
+  void addFrame(QueuedFrame frame);
+  /// Starts from a known state (a study's prior), instead of waiting for the start policy.
+  void initialize(const NavState& state);
+  /// The end of the stream: the frames still waiting go to the filter, which cannot process
+  /// those the IMU does not reach (the listener hears of each).
+  void flush();
+  /// Forgets state, map, queue and the start policy's windows; starts again at rest or moving.
+  void reset();
+
+  /// How a start's state is placed in the world before the filter takes it (the simulator
+  /// registers it to the truth's position and yaw; none: as the initializer gives it).
+  void setRegistration(std::function<NavState(const NavState&)> registration) {
+    registration_ = std::move(registration);
+  }
+  /// Applies new start settings (dynamic_reconfigure); the running filter is not touched.
+  void setParams(const PipelineParams& params);
+
+  /// The filter (hasCamera() must be true).
+  EkfSlam& filter() { return *filter_; }
+  const EkfSlam& filter() const { return *filter_; }
+  size_t queuedFrames() const { return queue_.size(); }
+
+ private:
+  void tryStatic(double t_now);
+  void tryDynamic(QueuedFrame& frame);
+  void processQueue();
+  void process(QueuedFrame& frame);
+  /// The state the filter starts from: the registration's, or `s` itself.
+  NavState registered(const NavState& s) const { return registration_ ? registration_(s) : s; }
+  void started(const std::string& event, const Quat& q_n_b);
+  void forgetStart();
+
+  EkfSlamConfig config_;
+  PipelineParams params_;
+  PipelineListener& listener_;
+  std::unique_ptr<EkfSlam> filter_;
+  StaticInitializer static_init_;
+  std::optional<StaticInitResult> at_rest_;
+  std::unique_ptr<DynamicInitializer> dynamic_init_;
+  std::optional<double> first_frame_t_;  ///< when waiting for a moving start began (camera clock) [s]
+  std::deque<QueuedFrame> queue_;
+  std::optional<Quat> prev_q_n_b_;  ///< attitude at the previous frame (the gyro's rotation seed)
+  bool camera_running_ = false;     ///< a frame has arrived since setCamera()
+  std::function<NavState(const NavState&)> registration_;
+};
+
+}  // namespace vi_ekf_slam

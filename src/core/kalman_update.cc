@@ -1,0 +1,111 @@
+#include "vi_ekf_slam/core/kalman_update.h"
+
+#include <cmath>
+#include <limits>
+
+#include "vi_ekf_slam/core/chi_squared.h"
+#include "vi_ekf_slam/core/matrix_utils.h"
+
+namespace vi_ekf_slam {
+
+void innovationCovariance(const Eigen::MatrixXd& P, const std::vector<MeasurementRows>& rows, Eigen::MatrixXd* PHt,
+                          Eigen::MatrixXd* S) {
+  int m = 0;
+  for (const auto& r : rows) m += r.dim();
+  PHt->resize(P.rows(), m);
+  S->resize(m, m);
+  int row = 0;
+  for (const auto& r : rows) {
+    auto cols = PHt->middleCols(row, r.dim());
+    cols.setZero();
+    for (const auto& b : r.blocks) cols.noalias() += P.middleCols(b.col, b.H.cols()) * b.H.transpose();
+    row += r.dim();
+  }
+  row = 0;
+  for (const auto& r : rows) {
+    auto out = S->middleRows(row, r.dim());
+    out.setZero();
+    for (const auto& b : r.blocks) out.noalias() += b.H * PHt->middleRows(b.col, b.H.cols());
+    out.middleCols(row, r.dim()).diagonal().array() += r.noise_var;
+    row += r.dim();
+  }
+  symmetrize(*S);
+}
+
+Eigen::VectorXd applyJacobian(const std::vector<MeasurementRows>& rows, const Eigen::VectorXd& dx) {
+  int m = 0;
+  for (const auto& r : rows) m += r.dim();
+  Eigen::VectorXd Hd = Eigen::VectorXd::Zero(m);
+  int row = 0;
+  for (const auto& r : rows) {
+    for (const auto& b : r.blocks) Hd.segment(row, r.dim()) += b.H * dx.segment(b.col, b.H.cols());
+    row += r.dim();
+  }
+  return Hd;
+}
+
+Eigen::VectorXd stackedResidual(const std::vector<MeasurementRows>& rows) {
+  int m = 0;
+  for (const auto& r : rows) m += r.dim();
+  Eigen::VectorXd out(m);
+  int row = 0;
+  for (const auto& r : rows) {
+    out.segment(row, r.dim()) = r.residual;
+    row += r.dim();
+  }
+  return out;
+}
+
+double normalizedInnovation(const Eigen::MatrixXd& P, const MeasurementRows& rows) {
+  const int k = rows.dim();
+  Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, 0, 3, 3> S = rows.noise_var * Eigen::MatrixXd::Identity(k, k);
+  for (const auto& a : rows.blocks) {
+    for (const auto& b : rows.blocks) {
+      S.noalias() += a.H * P.block(a.col, b.col, a.H.cols(), b.H.cols()) * b.H.transpose();
+    }
+  }
+  const Eigen::LDLT<Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, 0, 3, 3>> ldlt(S);
+  if (ldlt.info() != Eigen::Success || !ldlt.isPositive()) return std::numeric_limits<double>::infinity();
+  const double d2 = rows.residual.dot(ldlt.solve(rows.residual));
+  return std::isfinite(d2) ? d2 : std::numeric_limits<double>::infinity();
+}
+
+bool kalmanGain(const Eigen::MatrixXd& PHt, const Eigen::MatrixXd& S, Eigen::LLT<Eigen::MatrixXd>* llt,
+                Eigen::MatrixXd* K) {
+  llt->compute(S);
+  if (llt->info() != Eigen::Success) return false;
+  *K = llt->solve(PHt.transpose()).transpose();  // P H^T S^-1
+  return true;
+}
+
+void josephUpdate(Eigen::MatrixXd& P, const Eigen::MatrixXd& K, const Eigen::MatrixXd& S, const Eigen::MatrixXd& PHt) {
+  const Eigen::Index n = P.rows(), m = K.cols();
+  Eigen::MatrixXd KW(n, 2 * m), WK(n, 2 * m);
+  KW.leftCols(m) = K;
+  KW.rightCols(m).noalias() = 0.5 * K * S - PHt;
+  WK.leftCols(m) = KW.rightCols(m);
+  WK.rightCols(m) = K;
+  P.triangularView<Eigen::Lower>() += KW * WK.transpose();
+  P.triangularView<Eigen::StrictlyUpper>() = P.transpose();
+}
+
+KalmanUpdateResult kalmanUpdate(FilterState& state, const std::vector<MeasurementRows>& rows, double gate_probability) {
+  KalmanUpdateResult res;
+  Eigen::MatrixXd PHt, S, K;
+  innovationCovariance(state.covariance(), rows, &PHt, &S);
+  Eigen::LLT<Eigen::MatrixXd> llt;
+  if (!kalmanGain(PHt, S, &llt, &K)) return res;
+  const Eigen::VectorXd r = stackedResidual(rows);
+  res.nis = r.dot(llt.solve(r));
+  if (!std::isfinite(res.nis)) return res;
+  if (gate_probability > 0.0 && res.nis > chiSquaredQuantile(gate_probability, static_cast<double>(r.size()))) {
+    return res;
+  }
+  const Eigen::VectorXd dx = K * r;
+  josephUpdate(state.mutableCovariance(), K, S, PHt);
+  state.boxplus(dx);
+  res.applied = true;
+  return res;
+}
+
+}  // namespace vi_ekf_slam

@@ -1,0 +1,208 @@
+#include "vi_ekf_slam/core/vio_pipeline.h"
+
+#include <sstream>
+#include <stdexcept>
+
+namespace vi_ekf_slam {
+
+namespace {
+/// A moving start older than this behind the newest IMU sample is not taken: the IMU buffer no
+/// longer reaches back to it [s].
+constexpr double kMaxStartAgeS = 1.0;
+
+bool allFinite(const NavState& n) {
+  return n.p_n_b.allFinite() && n.v_n_b.allFinite() && n.q_n_b.coeffs().allFinite() && n.b_g.allFinite() &&
+         n.b_a.allFinite() && n.cov.allFinite();
+}
+}  // namespace
+
+VioPipeline::VioPipeline(const EkfSlamConfig& config, const PipelineParams& params, PipelineListener& listener)
+    : config_(config), params_(params), listener_(listener), static_init_(params.static_init) {}
+
+VioPipeline::VioPipeline(const EkfSlamConfig& config, const PipelineParams& params, const CameraModel& camera,
+                         const CameraExtrinsics& T_b_c, PipelineListener& listener)
+    : VioPipeline(config, params, listener) {
+  setCamera(camera, T_b_c);
+}
+
+void VioPipeline::setCamera(const CameraModel& camera, const CameraExtrinsics& T_b_c) {
+  filter_ = std::make_unique<EkfSlam>(config_, camera, T_b_c);
+  dynamic_init_ = std::make_unique<DynamicInitializer>(params_.dynamic_init, camera, T_b_c);
+  first_frame_t_.reset();
+  queue_.clear();
+  prev_q_n_b_.reset();
+  camera_running_ = false;
+}
+
+void VioPipeline::clearCamera() {
+  filter_.reset();
+  dynamic_init_.reset();
+  first_frame_t_.reset();
+  queue_.clear();
+  prev_q_n_b_.reset();
+  camera_running_ = false;
+}
+
+bool VioPipeline::setConfig(const EkfSlamConfig& config, std::string* error) {
+  if (filter_ && !filter_->setConfig(config, error)) return false;
+  config_ = config;
+  return true;
+}
+
+void VioPipeline::setParams(const PipelineParams& params) {
+  params_ = params;
+  static_init_ = StaticInitializer(params.static_init);
+  if (filter_)
+    dynamic_init_ = std::make_unique<DynamicInitializer>(params.dynamic_init, filter_->camera(), filter_->extrinsics());
+  at_rest_.reset();
+  first_frame_t_.reset();
+}
+
+void VioPipeline::forgetStart() {
+  static_init_.reset();
+  at_rest_.reset();
+  if (dynamic_init_) dynamic_init_->reset();
+  first_frame_t_.reset();
+}
+
+void VioPipeline::reset() {
+  if (filter_) filter_->reset();
+  forgetStart();
+  queue_.clear();
+  prev_q_n_b_.reset();
+}
+
+void VioPipeline::initialize(const NavState& state) {
+  if (!filter_) throw std::logic_error("VioPipeline::initialize: no camera yet");
+  filter_->initialize(state);
+  forgetStart();
+  prev_q_n_b_.reset();
+}
+
+void VioPipeline::started(const std::string& event, const Quat& q_n_b) {
+  prev_q_n_b_ = q_n_b;
+  listener_.started(event);
+}
+
+void VioPipeline::addImu(const ImuData& imu) {
+  // The rest test looks at every sample; the filter and the moving start only from the first
+  // frame (or a start from a known state) on: a start before the camera runs would drift on the
+  // IMU alone until then.
+  if (auto r = static_init_.addImu(imu)) at_rest_ = r;
+  if (!filter_ || (!camera_running_ && !filter_->initialized())) return;
+  if (!filter_->initialized()) dynamic_init_->addImu(imu);
+  filter_->addImu(imu);
+  tryStatic(imu.timestamp);
+  processQueue();
+}
+
+void VioPipeline::tryStatic(double t_now) {
+  // Only a recent static interval: if the rig moved since, wait for the next one.
+  if (filter_->initialized() || !at_rest_ || !at_rest_->usableAt(t_now)) return;
+  filter_->initialize(registered(at_rest_->navState()));
+  std::ostringstream e;
+  e.precision(3);
+  e << "initialized: static, " << params_.static_init.window_s << " s at rest (accel std " << at_rest_->accel_std_mps2
+    << " m/s^2, gyro std " << at_rest_->gyro_std_radps << " rad/s)";
+  forgetStart();
+  // The tracks start with the filter: no rotation seed for the first frame.
+  prev_q_n_b_.reset();
+  listener_.started(e.str());
+}
+
+void VioPipeline::addFrame(QueuedFrame frame) {
+  if (!filter_) return;
+  camera_running_ = true;
+  if (!filter_->initialized()) {
+    tryDynamic(frame);
+    return;
+  }
+  if (filter_->imuTime(frame.t) < filter_->state().timestamp) {
+    listener_.dropped(FrameDrop::kLate);
+    return;
+  }
+  queue_.push_back(std::move(frame));
+  while (static_cast<int>(queue_.size()) > params_.max_frame_queue) {
+    queue_.pop_front();
+    listener_.dropped(FrameDrop::kQueueFull);
+  }
+  processQueue();
+}
+
+void VioPipeline::tryDynamic(QueuedFrame& frame) {
+  if (!params_.dynamic_init_enabled) {
+    listener_.waiting("waiting for a static IMU interval to initialize");
+    return;
+  }
+  if (!first_frame_t_) first_frame_t_ = frame.t;
+  // The tracks it aligns are the tracks the filter goes on with; no rotation seed (no attitude
+  // yet). The frame goes to the IMU clock through the configured time offset.
+  CameraFrame features = frame.features(std::nullopt);
+  features.timestamp = filter_->imuTime(frame.t);
+  dynamic_init_->addFrame(features);
+  std::string why;
+  const std::optional<DynamicInitResult> r = dynamic_init_->tryInitialize(&why);
+  if (!r) {
+    std::ostringstream w;
+    w << "waiting to initialize: at rest for " << params_.static_init.window_s << " s, or moving: " << why;
+    listener_.waiting(w.str());
+    return;
+  }
+  if (r->state.timestamp < filter_->latestImuTime() - kMaxStartAgeS) return;
+  const int added = filter_->initialize(*r, registered(r->state));
+  std::ostringstream e;
+  e.precision(3);
+  e << "initialized: dynamic, " << (frame.t - *first_frame_t_) << " s after the first image (" << r->frames
+    << " images, " << r->features << " features, " << added << " landmarks, median depth " << r->median_depth_m
+    << " m, scale sigma " << 100.0 * r->scale_sigma << "%, velocity sigma " << r->velocity_sigma_mps
+    << " m/s, roll/pitch sigma " << r->tilt_sigma_rad << " rad, time offset "
+    << filter_->config().camera_time_offset_s + r->time_offset_correction_s << " s)";
+  forgetStart();
+  started(e.str(), filter_->navState().q_n_b);
+}
+
+void VioPipeline::processQueue() {
+  while (!queue_.empty() && filter_ && filter_->initialized() &&
+         filter_->imuTime(queue_.front().t) <= filter_->latestImuTime()) {
+    QueuedFrame f = std::move(queue_.front());
+    queue_.pop_front();
+    if (filter_->imuTime(f.t) < filter_->state().timestamp) {
+      listener_.dropped(FrameDrop::kLate);
+      continue;
+    }
+    process(f);
+  }
+}
+
+void VioPipeline::flush() {
+  while (!queue_.empty() && filter_ && filter_->initialized()) {
+    QueuedFrame f = std::move(queue_.front());
+    queue_.pop_front();
+    process(f);
+  }
+}
+
+void VioPipeline::process(QueuedFrame& f) {
+  // The gyro-predicted camera rotation since the previous frame seeds the tracker.
+  std::optional<Mat3> R_cur_prev;
+  if (filter_->propagateTo(filter_->imuTime(f.t)) && prev_q_n_b_) {
+    const Mat3 R_b = (filter_->navState().q_n_b.conjugate() * *prev_q_n_b_).toRotationMatrix();
+    const Mat3& R_b_c = filter_->extrinsics().R_b_c;
+    R_cur_prev = R_b_c.transpose() * R_b * R_b_c;
+  }
+  CameraFrame features = f.features(R_cur_prev);
+  features.timestamp = f.t;
+  FrameResult r = filter_->processFrame(features);
+  if (r.processed && r.lost.empty() && !allFinite(filter_->navState())) r.lost = "the filter state became non-finite";
+  listener_.processed(features, r);
+  if (!r.processed) return;
+  if (!r.lost.empty()) {
+    // Nothing of a lost filter is used: start over, at rest or moving.
+    reset();
+    listener_.lost(r.lost);
+    return;
+  }
+  prev_q_n_b_ = filter_->navState().q_n_b;
+}
+
+}  // namespace vi_ekf_slam
