@@ -11,12 +11,14 @@ ROOT     := $(CURDIR)
 WS       ?= $(ROOT)/.catkin_ws
 DATA_DIR ?= $(abspath $(ROOT)/../shared/data)
 JOBS     ?= $(shell nproc)
+# NATIVE=ON: compile for this machine's CPU (-march=native; see CMakeLists.txt). Off by default.
+NATIVE   ?= OFF
 export DATA_DIR
 DEVEL    := $(WS)/devel
 BIN      := $(DEVEL)/lib/vi_ekf_slam
-CATKIN   := cd $(WS) && catkin_make -j$(JOBS) -DCMAKE_BUILD_TYPE=Release -DDATA_DIR=$(DATA_DIR) -DCMAKE_EXPORT_COMPILE_COMMANDS=ON
+CATKIN   := cd $(WS) && catkin_make -j$(JOBS) -DCMAKE_BUILD_TYPE=Release -DDATA_DIR=$(DATA_DIR) -DCMAKE_EXPORT_COMPILE_COMMANDS=ON -DVI_EKF_SLAM_NATIVE_ARCH=$(NATIVE)
 
-.PHONY: all deps workspace build test lint demo study suite initsuite bag screenshot bench soak realdata params rebuild-check clean help
+.PHONY: all deps workspace build test lint demo study suite initsuite bag screenshot bench soak realdata params results rebuild-check clean help
 
 BAG ?= results/bags/hallway.bag
 RVIZ ?= 0
@@ -50,7 +52,8 @@ help:
 	@echo "make realdata - the real hand-held recording (DATA_DIR/dmvio_handheld) -> results/realdata"
 	@echo "make bench  - benchmarks (core vs map size, tracker, pipeline) -> results/bench/summary.json"
 	@echo "make soak   - 30 min endurance walk per mechanization (SOAK_MINUTES=) -> results/soak"
-	@echo "make lint   - catkin_lint, clang-format check, clang-tidy on the core (part of make test)"
+	@echo "make results - docs/results.md (and the README's quote) from the results of demo, realdata, suite, bench"
+	@echo "make lint   - catkin_lint, clang-format, pyflakes on the Python, clang-tidy on the core (part of make test)"
 	@echo "make clean  - remove the build workspace"
 
 deps:
@@ -75,11 +78,13 @@ build: deps workspace
 	$(CATKIN)
 
 # Hygiene (configs: .clang-format, .clang-tidy): catkin_lint without errors or warnings, every
-# C++ file formatted, clang-tidy clean on the ROS-free core (compile_commands.json from the build).
+# C++ file formatted, the Python without pyflakes findings, clang-tidy clean on the ROS-free core
+# (compile_commands.json from the build).
 CXX_SOURCES = $(shell find src include test tools bench -name '*.cc' -o -name '*.h')
 lint: build
 	catkin_lint --strict $(PKG_LINK)
 	@clang-format --dry-run --Werror $(CXX_SOURCES) && echo "clang-format: clean"
+	@pyflakes3 $$(git ls-files '*.py' 2>/dev/null || find tools bench test -name '*.py') && echo "pyflakes: clean"
 	@# One clang-tidy per file, as many at once as there are cores (serially it took 2.5 min).
 	printf '%s\n' $(wildcard src/core/*.cc) | xargs -P $$(nproc) -n 1 clang-tidy -p $(WS)/build --quiet 2>&1 | \
 	  { grep -v "warnings generated" || true; }
@@ -108,6 +113,11 @@ params: build
 	$(BIN)/vi_ekf_slam_params --yaml > config/vi_ekf_slam.yaml
 	$(BIN)/vi_ekf_slam_params --cfg > cfg/EkfSlamReconfigure.cfg
 	$(BIN)/vi_ekf_slam_params --markdown > docs/parameters.md
+
+# docs/results.md, every current number, from the result files of make demo, realdata, suite and
+# bench; the README quotes its first section (a test fails while the quote differs).
+results:
+	python3 tools/results_page.py --results results --out docs/results.md --readme README.md
 
 # The rendered hallway walk (2 s standing + 35 s walk), cached until the renderer changes.
 bag: build $(BAG)
@@ -142,7 +152,7 @@ bench: build $(BAG) $(if $(wildcard $(DATA_DIR)/dmvio_handheld/mav0),results/bag
 	  $(if $(wildcard $(REAL)/mav0),--real-bag $(REAL_BAG))
 	python3 bench/summarize.py results/bench/google_benchmark.json results/bench/pipeline.json results/bench
 
-# The suite (docs/suite.md): the study with the same seeds over the built-in walk, every
+# The suite (docs/evaluation.md): the study with the same seeds over the built-in walk, every
 # trajectory in DATA_DIR/trajectories (120 s windows) and the walks of tools/make_walks.py; one
 # table per case and configuration plus the worst case of each configuration; SEED=1,2,3: each seed
 # in SUITE_OUT/seed_N and the worst over all seeds in SUITE_OUT/suite_seeds.md.

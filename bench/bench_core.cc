@@ -1,4 +1,4 @@
-// Core benchmarks (issue 6): cost of each filter operation against the map size N. Every
+// Core benchmarks: cost of each filter operation against the map size N. Every
 // family runs at N = 25, 50, 100, 200, 400; bench/summarize.py fits the growth exponent.
 #include <benchmark/benchmark.h>
 

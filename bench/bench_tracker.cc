@@ -1,4 +1,4 @@
-// Front-end benchmarks (issue 6): detection + KLT tracking per frame with 150 tracks, on rendered
+// Front-end benchmarks: detection + KLT tracking per frame with 150 tracks, on rendered
 // 699x540 hallway frames and on real 752x480 EuRoC frames (DATA_DIR; skipped without it).
 // Frames are played forward and backward, so tracks continue as in a video.
 #include <benchmark/benchmark.h>

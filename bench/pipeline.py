@@ -1,5 +1,5 @@
 #!/usr/bin/python3
-"""Whole-pipeline numbers for `make bench` (issue 6):
+"""Whole-pipeline numbers for `make bench`:
   - offline: vi_ekf_slam_run_bag on the hallway bag pinned to one core (taskset), its real-time
     factor and filter+tracker time per frame;
   - offline on a real 1280x720 recording (--real-bag, the make realdata bag), pinned to one core:

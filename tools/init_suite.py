@@ -27,7 +27,7 @@ from suite import fmt, trajectory_files, walk_files, write_walks
 # for the known ones) and the suite's generated walks.
 SHORT_NAMES = {"tum_corridor1_512_16_okvis": "tum_corridor", "euroc_V1_01_easy": "euroc_V1_01",
                "udel_arl_short": "udel_arl"}
-MIN_FRACTION_WITHIN = 0.95  # of the runs initialized within INIT_WITHIN_S (issue 16)
+MIN_FRACTION_WITHIN = 0.95  # of the runs initialized within INIT_WITHIN_S
 INIT_WITHIN_S = 1.5
 
 

@@ -13,10 +13,10 @@ speed) and a small postural sway when standing:
   fast        a brisk walk at 2.4 m/s from the start (a hurried responder; the gait at its largest);
   stairwell   from a stand, within a second up a stairwell that turns all the time (a helix of
               1.6 m radius, 0.75 rad/s, 0.24 m up per second) for 34 s, then the block (the start
-              of OpenVINS's udel_gore trajectory, docs/suite.md).
+              of OpenVINS's udel_gore trajectory, docs/evaluation.md).
 
 Not in the suite's default (`--kinds all` adds them; `make suite SUITE_WALKS=all`), probes of walks
-the suite does not have (docs/suite.md):
+the suite does not have (docs/evaluation.md):
 
   slow_walk    0.6 m/s throughout (a careful walker: the gait's bounce at half a walk's);
   start04      0.4 m/s for 10 s, then 1.3 m/s from 12 s (between the crawl and the slow start);
@@ -25,7 +25,7 @@ the suite does not have (docs/suite.md):
   run          3.5 m/s from the first sample (the gait at its cap).
 
 The files are made by a formula, not recorded: they exercise the starts, stands and climbs that
-held-out recordings have (issue 17), and the suite runs them next to the recorded trajectories.
+held-out recordings have, and the suite runs them next to the recorded trajectories.
 
   make_walks.py OUT_DIR [--kinds K1,K2,..|all]
       writes OUT_DIR/<kind>.txt (100 Hz, z up); by default the suite's six kinds above

@@ -1,4 +1,4 @@
-// Endurance run (issue 6): a 30-minute pedestrian walk doing laps around a block of corridors,
+// Endurance run: a 30-minute pedestrian walk doing laps around a block of corridors,
 // driven offline through the core with simulated feature tracks, for every mechanization.
 // Records the position error with its 3-sigma, the map size and the process's resident memory
 // once per second; fails (exit 1) on any non-finite estimate.

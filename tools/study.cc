@@ -80,6 +80,7 @@ struct Options {
   std::string new_landmarks = "wait";
   bool new_landmarks_given = false;  // "default" keeps the core's choice unless told
   bool all_runs = false;             // every run's runN.csv and landmarks_runN.csv (else run 0's)
+  bool list_configs = false;         // print the configurations and exit
   std::string imu_biases = "drawn";  // drawn | none: the simulated IMU's turn-on biases
 };
 
@@ -125,6 +126,9 @@ Options parse(int argc, char** argv) {
       "depth-prior", po::value(&o.depth_prior),
       "fixed | scene: new inverse-depth landmarks start at INITIAL_DEPTH_M, or at the median depth of the landmarks "
       "seen (default: the core's)")(
+      "list-configs", po::bool_switch(&o.list_configs),
+      "print every configuration's name and its sets (paper: the paper's three; suite: the suite's "
+      "default list) and exit; the scripts read the names from here")(
       "all-runs", po::bool_switch(&o.all_runs),
       "write every run's errors and sigmas (runN.csv, landmarks_runN.csv), not only run 0's")(
       "landmark-entry", po::value(&o.landmark_entry),
@@ -287,6 +291,7 @@ std::vector<std::pair<std::string, EkfSlamConfig>> makeConfigs(const Options& o,
     if (it == all.end()) usage("unknown configuration '" + name + "'");
     chosen.push_back(*it);
   }
+  if (chosen.empty()) usage("--configs names no configuration (--list-configs lists them)");
   return chosen;
 }
 
@@ -372,9 +377,31 @@ void writeConfigFiles(const fs::path& dir, const sim::ConsistencySummary& s, con
 
 }  // namespace
 
+/// The sets a configuration belongs to, for --list-configs: the paper's three, and the suite's
+/// default list (the paper's, the robocentric filter with inverse depth, with the zero-velocity
+/// update, and the node's default).
+std::string configSets(const std::string& name, size_t index) {
+  std::string sets;
+  if (index < 3) sets += "paper,suite";
+  if (name == "sensor_centric_composition+inverse_depth+every_update" ||
+      name == "sensor_centric_composition+inverse_depth+every_update+zero_velocity" || name == "default") {
+    sets += "suite";
+  }
+  return sets.empty() ? "-" : sets;
+}
+
 int main(int argc, char** argv) {
   tuneAllocatorForLargeBuffers();
   const Options o = parse(argc, argv);
+  if (o.list_configs) {
+    Options all = o;
+    all.configs = "all";
+    const auto configs = makeConfigs(all, sim::Scenario());
+    for (size_t i = 0; i < configs.size(); ++i) {
+      std::printf("%s %s\n", configs[i].first.c_str(), configSets(configs[i].first, i).c_str());
+    }
+    return 0;
+  }
   sim::Scenario sc;
   std::string traj_name = "builtin_hallway_walk";
   try {

@@ -27,12 +27,18 @@ import time
 from study_cli import add_study_options
 
 HERE = os.path.dirname(os.path.abspath(__file__))
-PAPER = ["world_centric", "sensor_centric", "sensor_centric_composition"]
-DEFAULT_CONFIGS = PAPER + [
-    "sensor_centric_composition+inverse_depth+every_update",
-    "sensor_centric_composition+inverse_depth+every_update+zero_velocity",
-    "default",
-]
+
+
+def study_configs(study):
+    """{configuration name: its sets} as the study lists them (`--list-configs`): the names are
+    written once, in the study."""
+    out = subprocess.run([study, "--list-configs"], capture_output=True, text=True, check=True).stdout
+    return {name: sets.split(",") for name, sets in (line.split() for line in out.splitlines() if line.strip())}
+
+
+def configs_in(study, the_set):
+    return [n for n, sets in study_configs(study).items() if the_set in sets]
+
 WINDOW_S = 120.0
 # (file in DATA_DIR/trajectories, window starts [s]); pedestrian unless said otherwise.
 KNOWN = {
@@ -86,7 +92,7 @@ def run_cases(a, seed, out_dir, walks, configs):
     t_start = time.time()
     for name, traj, start, window in cases(a.data, walks):
         out = os.path.join(out_dir, name)
-        cmd = [a.study, "--trajectory", traj, "--runs", str(a.runs), "--seed", str(seed), "--configs", a.configs,
+        cmd = [a.study, "--trajectory", traj, "--runs", str(a.runs), "--seed", str(seed), "--configs", ",".join(configs),
                "--threads", str(a.threads), "--out", out]
         if start > 0:
             cmd += ["--start-offset", str(start)]
@@ -110,6 +116,7 @@ def run_cases(a, seed, out_dir, walks, configs):
     # Per case: each configuration's metrics and its ATE over the best of the paper's three.
     rows, worst = [], {c: new_worst() for c in configs}
     band = None
+    paper = configs_in(a.study, "paper")
     for name, s in results.items():
         if "failed" in s:
             for c in configs:
@@ -120,7 +127,7 @@ def run_cases(a, seed, out_dir, walks, configs):
                 add_to_worst(worst[c], row)
             continue
         band = s["config"]["pose_nees_band"]
-        paper_ate = [s[c]["ate_position_m"] for c in PAPER if c in s and s[c]["ate_position_m"] is not None]
+        paper_ate = [s[c]["ate_position_m"] for c in paper if c in s and s[c]["ate_position_m"] is not None]
         best_paper = min(paper_ate) if paper_ate else None
         for c in configs:
             m = s[c]
@@ -198,7 +205,7 @@ def main():
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     add_study_options(ap, out="results/suite", runs=8)
     ap.add_argument("--seed", default="1", help="a seed, or several (1,2,3): each in OUT/seed_N, worst over all")
-    ap.add_argument("--configs", default=",".join(DEFAULT_CONFIGS))
+    ap.add_argument("--configs", default="", help="configurations (default: the study's suite set)")
     ap.add_argument("--walks", default="", help="tools/make_walks.py kinds, comma-separated, or all (default: its own)")
     ap.add_argument("--threads", type=int, default=os.cpu_count() or 1)
     ap.add_argument("extra", nargs="*", help="more options for every study call (after --)")
@@ -209,7 +216,7 @@ def main():
         sys.exit("suite: --seed takes integers, comma-separated")
 
     walks = write_walks(a.out, a.walks)
-    configs = a.configs.split(",")
+    configs = a.configs.split(",") if a.configs else configs_in(a.study, "suite")
     t_start = time.time()
     if len(seeds) == 1:
         rows, _ = run_cases(a, seeds[0], a.out, walks, configs)

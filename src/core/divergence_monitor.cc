@@ -1,5 +1,7 @@
 #include "vi_ekf_slam/core/divergence_monitor.h"
 
+#include "vi_ekf_slam/core/param_ranges.h"
+
 #include <Eigen/Cholesky>
 #include <algorithm>
 #include <cmath>
@@ -9,12 +11,10 @@ namespace vi_ekf_slam {
 
 std::string DivergenceParams::validate() const {
   std::ostringstream err;
-  if (!(max_speed_mps > 0.0)) err << "divergence max_speed_mps [m/s] must be > 0\n";
-  if (!(max_rejected_fraction > 0.0 && max_rejected_fraction <= 1.0)) {
-    err << "divergence max_rejected_fraction must be in (0, 1]\n";
-  }
-  if (!(window_s > 0.0)) err << "divergence window_s [s] must be > 0\n";
-  if (min_observations < 1) err << "divergence min_observations must be >= 1\n";
+  checkRange(err, "lost_max_speed_mps", max_speed_mps);
+  checkRange(err, "lost_max_rejected_fraction", max_rejected_fraction);
+  checkRange(err, "lost_window_s", window_s);
+  checkRange(err, "lost_min_observations", min_observations);
   return err.str();
 }
 

@@ -10,24 +10,25 @@
 #include <sstream>
 
 #include "vi_ekf_slam/core/so3.h"
+#include "vi_ekf_slam/core/param_ranges.h"
 #include "vi_ekf_slam/core/static_initializer.h"
 
 namespace vi_ekf_slam {
 
 std::string DynamicInitParams::validate() const {
   std::ostringstream err;
-  if (!(window_s > 0.1 && window_s <= 10.0)) err << "dynamic init window_s [s] must be in (0.1, 10]\n";
-  if (!(max_window_s <= 10.0)) err << "dynamic init max_window_s [s] must be <= 10\n";
-  if (min_frames < 3) err << "dynamic init min_frames must be >= 3\n";
-  if (min_observations < 3) err << "dynamic init min_observations must be >= 3\n";
-  if (min_features < 6) err << "dynamic init min_features must be >= 6\n";
-  if (!(max_velocity_sigma_mps > 0.0)) err << "dynamic init max_velocity_sigma_mps [m/s] must be > 0\n";
-  if (!(max_tilt_sigma_rad > 0.0)) err << "dynamic init max_tilt_sigma_rad [rad] must be > 0\n";
-  if (!(max_scale_sigma > 0.0)) err << "dynamic init max_scale_sigma [ratio] must be > 0\n";
-  if (!(gyro_bias_sigma_radps > 0.0)) err << "dynamic init gyro_bias_sigma_radps [rad/s] must be > 0\n";
-  if (!(accel_bias_sigma_mps2 >= 0.0)) err << "dynamic init accel_bias_sigma_mps2 [m/s^2] must be >= 0\n";
-  if (!(pixel_noise_px > 0.0)) err << "dynamic init pixel_noise_px [px] must be > 0\n";
-  if (!(gravity_mps2 > 9.0 && gravity_mps2 < 10.5)) err << "dynamic init gravity_mps2 must be in (9, 10.5)\n";
+  checkRange(err, "dynamic_init_window_s", window_s);
+  checkRange(err, "dynamic_init_max_window_s", max_window_s);
+  checkRange(err, "dynamic_init_min_frames", min_frames);
+  checkRange(err, "dynamic_init_min_observations", min_observations);
+  checkRange(err, "dynamic_init_min_features", min_features);
+  checkRange(err, "dynamic_init_max_velocity_sigma_mps", max_velocity_sigma_mps);
+  checkRange(err, "dynamic_init_max_tilt_sigma_rad", max_tilt_sigma_rad);
+  checkRange(err, "dynamic_init_max_scale_sigma", max_scale_sigma);
+  checkRange(err, "dynamic_init_gyro_bias_sigma_radps", gyro_bias_sigma_radps);
+  checkRange(err, "dynamic_init_accel_bias_sigma_mps2", accel_bias_sigma_mps2);
+  checkRange(err, "pixel_noise_px", pixel_noise_px);
+  checkRange(err, "gravity_mps2", gravity_mps2);
   return err.str();
 }
 

@@ -1,5 +1,7 @@
 #include "vi_ekf_slam/core/feature_tracker.h"
 
+#include "vi_ekf_slam/core/param_ranges.h"
+
 #include <algorithm>
 #include <cmath>
 #include <opencv2/calib3d.hpp>
@@ -12,18 +14,23 @@ namespace vi_ekf_slam {
 
 std::string TrackerParams::validate() const {
   std::ostringstream err;
-  if (max_tracks < 8) err << "max_tracks must be >= 8 (RANSAC needs 8 points)\n";
-  if (grid_cols < 1 || grid_rows < 1) err << "grid_cols and grid_rows must be >= 1\n";
-  if (!(min_distance_px >= 1.0)) err << "min_distance_px must be >= 1 px\n";
-  if (!(quality_level > 0.0 && quality_level < 1.0)) err << "quality_level must be in (0, 1)\n";
-  if (fast_threshold < 1) err << "fast_threshold must be >= 1\n";
-  if (klt_window_px < 5 || klt_window_px % 2 == 0) err << "klt_window_px must be odd and >= 5\n";
-  if (klt_pyramid_levels < 0 || klt_pyramid_levels > 6) err << "klt_pyramid_levels must be in [0, 6]\n";
-  if (!(fb_threshold_px > 0.0)) err << "fb_threshold_px must be > 0\n";
-  if (!(ransac_threshold_px > 0.0)) err << "ransac_threshold_px must be > 0\n";
-  if (border_px < 0) err << "border_px must be >= 0\n";
-  if (!(redetect_fraction > 0.0 && redetect_fraction <= 1.0)) err << "redetect_fraction must be in (0, 1]\n";
-  if (max_image_width_px != 0 && max_image_width_px < 160) err << "max_image_width_px must be 0 or >= 160 px\n";
+  checkRange(err, "max_tracks", max_tracks);  // RANSAC needs 8 points
+  checkRange(err, "tracker_grid_cells", grid_cols);
+  checkRange(err, "tracker_grid_cells", grid_rows);
+  checkRange(err, "min_distance_px", min_distance_px);
+  checkRange(err, "quality_level", quality_level);
+  checkRange(err, "fast_threshold", fast_threshold);
+  checkRange(err, "klt_window_px", klt_window_px);
+  if (klt_window_px % 2 == 0) err << "klt_window_px must be odd (got " << klt_window_px << ")\n";
+  checkRange(err, "klt_pyramid_levels", klt_pyramid_levels);
+  checkRange(err, "fb_threshold_px", fb_threshold_px);
+  checkRange(err, "ransac_threshold_px", ransac_threshold_px);
+  checkRange(err, "tracker_border_px", border_px);
+  checkRange(err, "redetect_fraction", redetect_fraction);
+  checkRange(err, "max_image_width_px", max_image_width_px);
+  if (max_image_width_px != 0 && max_image_width_px < 160) {
+    err << "max_image_width_px must be 0 (full resolution) or at least 160 (got " << max_image_width_px << ")\n";
+  }
   return err.str();
 }
 

@@ -307,7 +307,7 @@ TEST(DelayedLandmarks, AShortMapTakesTheTwoViewDepthWhenItBeatsThePrior) {
 // A waiting track is tried at every image until it enters. Gated on its own estimate (sigma(rho) /
 // rho), it would enter at the first image whose pixel noise puts it near, and the map's inverse
 // depths would be biased high: on a slow simulated start, points entered at half their distance
-// and the velocity followed them (docs/suite.md). Gated on sigma(rho) against the scene's inverse
+// and the velocity followed them (docs/evaluation.md). Gated on sigma(rho) against the scene's inverse
 // depth, the entered inverse depths are nearly unbiased. 400 points 4-16 m ahead, a rig walking
 // forward at 0.5 m/s with exact poses, 1 px noise on every view: the mean of (rho - rho_true) /
 // sigma(rho) over the entered points is 0.19 (260 entered; a gate on the track's own sigma(rho) /

@@ -9,6 +9,7 @@
 #include <fstream>
 #include <sstream>
 
+#include "vi_ekf_slam/core/param_ranges.h"
 #include "vi_ekf_slam/ros/param_table.h"
 #include "vi_ekf_slam/ros/params.h"
 
@@ -168,4 +169,33 @@ TEST(Params, EveryShippedParameterFileLoads) {
     NodeParams p;
     EXPECT_EQ(loadParams(yaml, &p), "") << f;
   }
+}
+
+// A range is written once, in the core (core/param_ranges.h): the table publishes it, and the core
+// struct that holds the parameter refuses a value outside it on its own (tools and tests that set
+// the structs directly go through no table). For each of the table's parameters with a core range,
+// a value just past its maximum and just below its minimum must be named by the core's validate().
+TEST(Params, EachCoreRangeIsWrittenOnceAndTheCoreRefusesValuesOutsideIt) {
+  int checked = 0;
+  for (const ParamSpec& spec : paramTable()) {
+    if (!hasParamRange(spec.name)) continue;
+    const ParamRange& r = paramRange(spec.name);
+    EXPECT_EQ(spec.min, r.min) << spec.name;
+    EXPECT_EQ(spec.max, r.max) << spec.name;
+    if (spec.name.rfind("static_", 0) == 0) continue;  // the static initializer has no validate()
+    const bool is_int = std::holds_alternative<int>(spec.defaultValue());
+    for (const double outside : {r.max + (is_int ? 1.0 : std::max(1e-6, std::abs(r.max) * 0.01)),
+                                 r.min - (is_int ? 1.0 : std::max(1e-9, std::abs(r.min) * 0.01))}) {
+      NodeParams p;
+      if (is_int) {
+        spec.set(p, ParamValue(static_cast<int>(outside)));
+      } else {
+        spec.set(p, ParamValue(outside));
+      }
+      const std::string err = p.filter.validate() + p.tracker.validate() + p.dynamic_init.validate();
+      EXPECT_NE(err.find(spec.name), std::string::npos) << spec.name << " = " << outside << " not refused: " << err;
+    }
+    ++checked;
+  }
+  EXPECT_GT(checked, 50);
 }

@@ -166,7 +166,7 @@ TEST(RealHandheld, First15SecondsTrackWithTheRigFile) {
 // its end, aligned on their own), so the ratio the issue asks for is what the test prints. The
 // issue names the cuts at 10 s and 30 s; one cut is one sample of where a hand happens to be slow
 // or a reference happens to be exact, so every 2.5 s from 5 s to 30 s is measured, and their
-// geometric mean held to the issue's 1.5x.
+// geometric mean held to 1.5x.
 TEST(RealHandheld, StartedMidWalkInitializesWhileMoving) {
   const auto whole = runSegment(0.0, 46.0, "");
   if (!whole) GTEST_SKIP() << "no dmvio_handheld in DATA_DIR";

@@ -280,7 +280,7 @@ TEST(MonteCarlo, ADynamicStartMidWalkIsQuickAndConsistent) {
   EXPECT_LT(sum.nees_pose_early, sum.pose_band.hi);
 }
 
-// What a start mid-walk costs over a start from the true state (issue 16 asks 10% in posyaw ATE)
+// What a start mid-walk costs over a start from the true state (the target: 10% in posyaw ATE)
 // is the accelerometer's turn-on bias: a start from the truth is handed it; a window of a walk
 // cannot tell its part across gravity from a tilt (nor can a static start). With an IMU whose
 // biases are zero (the filter keeps its prior) the dynamic start tracks as the truth's start does.

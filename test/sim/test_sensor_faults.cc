@@ -94,7 +94,7 @@ TEST(SensorFaults, FilterRidesThroughDropoutGapOutliersAndCoveredCamera) {
 // not count. A crawl (0.3 m/s, the gait's bounce and sway a quarter of a walk's) is as quiet to
 // the IMU's rest test as a stand; its images are not, and their standing test decides: the gate
 // widens during the crawl as during a walk (before: 95% for the whole crawl, 5% of its good
-// observations cut; docs/suite.md).
+// observations cut; docs/evaluation.md).
 TEST(SensorFaults, TheGateWidensDuringACrawlWhoseImuLooksAtRest) {
   sim::HallwayParams h;
   h.speed_mps = 0.3;

@@ -8,7 +8,7 @@
 // scene's, not its own: a track is tried at every image, and a gate on
 // its own noisy estimate lets each track in at the first image whose noise puts it near (small
 // sigma(rho) / rho), so the map's points entered too near on average (half their distance on a slow
-// start, with the velocity following them; docs/suite.md). sigma(rho) depends on the baseline and
+// start, with the velocity following them). sigma(rho) depends on the baseline and
 // the rays' geometry, not on the pixel noise's draw, so that gate selects nothing. A track that
 // has not got there after max_wait_s (a far point, a rotation in place) is forgotten and starts
 // again on a newer clone. Waiting costs the filter those tracks' information: a map with fewer

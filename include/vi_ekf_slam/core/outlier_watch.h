@@ -1,8 +1,8 @@
 // Which chi^2 gate the visual update uses. The gate is there for outliers (a track that slid onto
 // another corner, an occlusion edge). On tracks without any, it only cuts the tails of the pixel
 // noise, and not at random: where the state is off, it cuts the observations whose noise adds to
-// the error and keeps those that agree with the state, so the error lingers (a slow start's scale,
-// docs/suite.md). So the update gates at gate_probability while the tracks show outliers, and at
+// the error and keeps those that agree with the state, so the error lingers (a slow start's
+// scale). So the update gates at gate_probability while the tracks show outliers, and at
 // the wider clean_gate_probability once the images of the last clean_gate_s seconds the rig moved
 // had none beyond it. Seconds, not a count of observations: right after a start every track is
 // fresh (a dynamic initialization even keeps only the features its alignment fits), and tracks

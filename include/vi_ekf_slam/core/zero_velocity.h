@@ -30,11 +30,11 @@ struct ZeroVelocityParams {
   /// zero-velocity pseudo-measurement. A standing pedestrian or hand-held rig sways by a few
   /// centimetres per second, and the sway is correlated over a few tenths of a second while the
   /// update is applied at the frame rate as if each frame's sway were independent: a smaller value
-  /// made the gyro bias and velocity overconfident at the TUM corridor's start (docs/study.md).
+  /// made the gyro bias and velocity overconfident at the TUM corridor's start.
   double velocity_sigma_mps = 0.08;
   /// The same while the IMU shows the rig at rest as well (imuAtRest: accelerometer std-dev below
   /// 0.2 m/s^2 over 0.1 s allows ~0.02 m/s of motion) [m/s]: a rig set down, a pedestrian leaning
-  /// on a wall. The rendered demo bag starts so (docs/study.md measures the difference).
+  /// on a wall. The rendered demo bag starts so.
   double rest_velocity_sigma_mps = 0.03;
   double gate_probability = 0.999;  ///< chi^2 gate (3 dof): a moving filter refuses the update
   /// A point first seen while the rig stands (or before the detector's first window, when
@@ -54,8 +54,8 @@ struct ZeroVelocityParams {
   /// Before the detector has its first window (at the start, after a reset), the rig counts as
   /// moving if the filter's own speed is at least this with 2-sigma confidence [m/s] (along the
   /// estimated velocity); a pedestrian's sway stays below 0.2 m/s. Holding every track back for
-  /// that first window made walks that start moving inconsistent (docs/suite.md); using the speed
-  /// later as well let points in during slow shuffles (TUM corridor @150 s: pose NEES 25.8).
+  /// that first window made walks that start moving inconsistent; using the speed
+  /// later as well let points in during slow shuffles.
   double moving_speed_mps = 0.3;
   double still_accel_std_mps2 = 0.2;  ///< at rest: std-dev of each accelerometer axis below this [m/s^2]
   double still_gyro_radps = 0.05;     ///< at rest: every angular rate below this [rad/s]
@@ -85,7 +85,7 @@ struct ExpectedMotion {
 /// A small median parallax alone is not standing: walking slowly towards a far scene moves most
 /// features by little more than the pixel noise (a 0.3 m/s walk: a median of 2.7-3.4 px over
 /// 0.5 s), and a zero-velocity update there took a walk for a stand: the velocity 0.27 m/s off
-/// with a sigma of 0.03 in one image (docs/suite.md). So, given the filter's own velocity
+/// with a sigma of 0.03 in one image. So, given the filter's own velocity
 /// (ExpectedMotion), the displacements are fitted with the flow that translation would make at
 /// the scene's depth: lambda, the share of it the images show (0 standing, 1 moving as the filter
 /// says at that depth), by least squares robust to slipped tracks. Its pattern (which way each

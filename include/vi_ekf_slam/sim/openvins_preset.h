@@ -1,5 +1,5 @@
 // The setup of OpenVINS's simulator defaults (rpng/open_vins, config rpng_sim, monocular), so our
-// study numbers can be set beside theirs (issue 6): IMU 400 Hz, camera 10 Hz, 752x480 with the
+// study numbers can be set beside theirs: IMU 400 Hz, camera 10 Hz, 752x480 with the
 // EuRoC cam0 intrinsics, radial-tangential distortion and camera-IMU transform, 1 px noise, their
 // IMU noise densities, map points generated 5-7 m in front of the camera, and a start from the
 // true state (no drawn error, zero initial biases) with 1 deg, 5 cm, 1 cm/s initial sigmas.

@@ -1,4 +1,4 @@
-// Real IMU, simulated camera (issue 5): a recorded IMU stream (ASL imu0/data.csv) replaces the
+// Real IMU, simulated camera: a recorded IMU stream (ASL imu0/data.csv) replaces the
 // synthesized one, the ground truth of the same recording (ASL state_groundtruth_estimate0 csv
 // or a TUM file in the same time base) gives the motion, and the camera observations are
 // simulated from the ground-truth poses. So the filter meets the real IMU's noise, biases,
