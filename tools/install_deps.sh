@@ -13,7 +13,7 @@ PKGS=(
   ros-base-dev catkin python3-catkin python3-catkin-pkg python3-empy
   libnodeletlib-dev libnodelet-dev libnodeletlib-tools
   libtf2-ros-dev libtf2-eigen-dev libtf2-geometry-msgs-dev tf2-tools libcamera-calibration-parsers-dev
-  libcv-bridge-dev libimage-transport-dev librosbag-dev python3-rosbag
+  libcv-bridge-dev libimage-transport-dev librosbag-dev libroslib-dev python3-rosbag
   librostest-dev python3-rostest python3-roslaunch rosbash
   python3-dynamic-reconfigure libdynamic-reconfigure-config-init-mutex-dev
   libstd-srvs-dev libdiagnostic-updater-dev nlohmann-json3-dev libboost-dev libboost-program-options-dev libyaml-cpp-dev

@@ -35,6 +35,7 @@
 #include <fstream>
 #include <iostream>
 #include <map>
+#include <ros/package.h>
 #include <rosbag/bag.h>
 #include <rosbag/view.h>
 #include <tf2/buffer_core.h>
@@ -387,8 +388,18 @@ int main(int argc, char** argv) {
   }
   const std::string bag_path = args["bag"];
   const std::string out = args.count("out") ? args["out"] : "results/run_bag/" + fs::path(bag_path).stem().string();
-  const std::string config =
-      args.count("config") ? args["config"] : std::string(VI_EKF_SLAM_SOURCE_DIR) + "/config/vi_ekf_slam.yaml";
+  // The package's default configuration, found as any ROS tool finds a package (devel space or
+  // installed), never in the source tree the binary was built from.
+  std::string config = args.count("config") ? args["config"] : "";
+  if (config.empty()) {
+    const std::string share = ros::package::getPath("vi_ekf_slam");
+    if (share.empty()) {
+      std::cerr << "error: the package vi_ekf_slam is not on ROS_PACKAGE_PATH (source setup.bash) and no config:= "
+                   "was given\n";
+      return 2;
+    }
+    config = share + "/config/vi_ekf_slam.yaml";
+  }
   std::vector<std::string> mechanizations;
   const std::string mech = args.count("mechanization") ? args["mechanization"] : "";
   if (mech == "all")
@@ -588,9 +599,15 @@ int main(int argc, char** argv) {
   if (!args.count("plots") || args["plots"] != "false") {
     // Top view, speed, NIS, time offset and tracks over time (and, with ground truth, errors with
     // 3-sigma and NEES) with Debian's Python (matplotlib).
-    const std::string cmd =
-        "/usr/bin/python3 '" + std::string(VI_EKF_SLAM_SOURCE_DIR) + "/tools/plot_run.py' '" + out + "'";
-    if (std::system(cmd.c_str()) != 0) std::cerr << "warning: plotting failed: " << cmd << "\n";
+    // plot_run.py is installed beside this program (devel and install spaces alike).
+    std::error_code ec;
+    const fs::path script = fs::read_symlink("/proc/self/exe", ec).parent_path() / "plot_run.py";
+    const std::string cmd = "/usr/bin/python3 '" + script.string() + "' '" + out + "'";
+    if (ec || !fs::exists(script)) {
+      std::cerr << "warning: no plots: " << script << " not found\n";
+    } else if (std::system(cmd.c_str()) != 0) {
+      std::cerr << "warning: plotting failed: " << cmd << "\n";
+    }
   }
   return 0;
 }

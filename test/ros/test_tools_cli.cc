@@ -277,3 +277,14 @@ TEST(ToolsCli, TheReadmeQuotesTheResultsPage) {
                           "/docs/results.md --readme " + tmp);
   EXPECT_NE(bad.code, 0) << bad.output;
 }
+
+// run_bag finds its default configuration as a ROS tool finds a package (devel or install space),
+// never in the source tree it was built from: without the package on ROS_PACKAGE_PATH and without
+// config:= it says so and stops.
+TEST(ToolsCli, RunBagFindsItsDefaultsThroughThePackageNotTheSourceTree) {
+  const std::string empty = ::testing::TempDir() + "no_packages";
+  const Outcome o =
+      run("mkdir -p " + empty + " && env ROS_PACKAGE_PATH=" + empty + " " + VI_TOOL_RUN_BAG + " bag:=/nonexistent.bag");
+  EXPECT_EQ(o.code, 2) << o.output;
+  EXPECT_NE(o.output.find("ROS_PACKAGE_PATH"), std::string::npos) << o.output;
+}
