@@ -26,12 +26,9 @@ VioPipeline::VioPipeline(const EkfSlamConfig& config, const PipelineParams& para
 }
 
 void VioPipeline::setCamera(const CameraModel& camera, const CameraExtrinsics& T_b_c) {
+  clearCamera();
   filter_ = std::make_unique<EkfSlam>(config_, camera, T_b_c);
   dynamic_init_ = std::make_unique<DynamicInitializer>(params_.dynamic_init, camera, T_b_c);
-  first_frame_t_.reset();
-  queue_.clear();
-  prev_q_n_b_.reset();
-  camera_running_ = false;
 }
 
 void VioPipeline::clearCamera() {
@@ -47,15 +44,6 @@ bool VioPipeline::setConfig(const EkfSlamConfig& config, std::string* error) {
   if (filter_ && !filter_->setConfig(config, error)) return false;
   config_ = config;
   return true;
-}
-
-void VioPipeline::setParams(const PipelineParams& params) {
-  params_ = params;
-  static_init_ = StaticInitializer(params.static_init);
-  if (filter_)
-    dynamic_init_ = std::make_unique<DynamicInitializer>(params.dynamic_init, filter_->camera(), filter_->extrinsics());
-  at_rest_.reset();
-  first_frame_t_.reset();
 }
 
 void VioPipeline::forgetStart() {
@@ -77,11 +65,6 @@ void VioPipeline::initialize(const NavState& state) {
   filter_->initialize(state);
   forgetStart();
   prev_q_n_b_.reset();
-}
-
-void VioPipeline::started(const std::string& event, const Quat& q_n_b) {
-  prev_q_n_b_ = q_n_b;
-  listener_.started(event);
 }
 
 void VioPipeline::addImu(const ImuData& imu) {
@@ -107,7 +90,7 @@ void VioPipeline::tryStatic(double t_now) {
   forgetStart();
   // The tracks start with the filter: no rotation seed for the first frame.
   prev_q_n_b_.reset();
-  listener_.started(e.str());
+  listener_.started(StartKind::kAtRest, e.str(), *filter_);
 }
 
 void VioPipeline::addFrame(QueuedFrame frame) {
@@ -158,7 +141,8 @@ void VioPipeline::tryDynamic(QueuedFrame& frame) {
     << " m/s, roll/pitch sigma " << r->tilt_sigma_rad << " rad, time offset "
     << filter_->config().camera_time_offset_s + r->time_offset_correction_s << " s)";
   forgetStart();
-  started(e.str(), filter_->navState().q_n_b);
+  prev_q_n_b_ = filter_->navState().q_n_b;
+  listener_.started(StartKind::kMoving, e.str(), *filter_);
 }
 
 void VioPipeline::processQueue() {
@@ -193,8 +177,12 @@ void VioPipeline::process(QueuedFrame& f) {
   CameraFrame features = f.features(R_cur_prev);
   features.timestamp = f.t;
   FrameResult r = filter_->processFrame(features);
-  if (r.processed && r.lost.empty() && !allFinite(filter_->navState())) r.lost = "the filter state became non-finite";
-  listener_.processed(features, r);
+  std::optional<NavState> nav;
+  if (r.processed && r.lost.empty()) {
+    nav = filter_->navState();
+    if (!allFinite(*nav)) r.lost = "the filter state became non-finite";
+  }
+  listener_.processed(features, r, *filter_);
   if (!r.processed) return;
   if (!r.lost.empty()) {
     // Nothing of a lost filter is used: start over, at rest or moving.
@@ -202,7 +190,7 @@ void VioPipeline::process(QueuedFrame& f) {
     listener_.lost(r.lost);
     return;
   }
-  prev_q_n_b_ = filter_->navState().q_n_b;
+  prev_q_n_b_ = nav->q_n_b;
 }
 
 }  // namespace vi_ekf_slam

@@ -39,15 +39,16 @@ namespace {
 class ReplayRecorder : public PipelineListener {
  public:
   explicit ReplayRecorder(FeatureReplayResult* out) : out_(out) {}
-  const VioPipeline* pipeline = nullptr;
   std::chrono::steady_clock::time_point tic;  ///< when the pipeline call began
 
-  void started(const std::string& /*event*/) override { out_->init_time = pipeline->filter().state().timestamp; }
-  void processed(const CameraFrame& /*frame*/, const FrameResult& r) override {
+  void started(StartKind /*kind*/, const std::string& /*event*/, EkfSlam& filter) override {
+    out_->init_time = filter.state().timestamp;
+  }
+  void processed(const CameraFrame& /*frame*/, const FrameResult& r, EkfSlam& filter) override {
     if (!r.processed) return;
     ++out_->frames_processed;
     out_->rejected_observations += static_cast<int>(r.update.rejected_ids.size());
-    EstimatedPose e = worldPoseFromNav(pipeline->filter().navState());
+    EstimatedPose e = worldPoseFromNav(filter.navState());
     e.processing_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - tic).count();
     out_->trajectory.push_back(e);
   }
@@ -65,7 +66,6 @@ FeatureReplayResult replayFeatures(const FeatureTrackData& data, const std::vect
   params.static_init = static_params;
   params.dynamic_init_enabled = false;
   VioPipeline pipeline(config, params, CameraModel(data.camera), data.T_b_c, recorder);
-  recorder.pipeline = &pipeline;
   // The two streams in the order of their stamps, as a recording plays them.
   size_t f = 0;
   for (const ImuData& imu : data.imu) {

@@ -218,12 +218,12 @@ void EkfSlamProcessor::queueFrame(const std::shared_ptr<PendingImage>& img,
                        }});
 }
 
-void EkfSlamProcessor::started(const std::string& event) {
+void EkfSlamProcessor::started(StartKind kind, const std::string& event, EkfSlam& /*filter*/) {
   ROS_INFO_STREAM("vi_ekf_slam: " << event);
   // A moving start used the current image; a start at rest begins the tracks anew, as the images
   // that reached the dynamic initializer meanwhile depend on when they arrived (a live replay and
   // an offline run then differ).
-  if (event.rfind("initialized: static", 0) == 0) {
+  if (kind == StartKind::kAtRest) {
     if (tracker_) tracker_->reset();
   } else if (current_) {
     last_processed_t_ = current_->t;
@@ -263,7 +263,7 @@ CameraFrame EkfSlamProcessor::trackImage(PendingImage& img, const std::optional<
   return frame;
 }
 
-void EkfSlamProcessor::processed(const CameraFrame& frame, const FrameResult& r) {
+void EkfSlamProcessor::processed(const CameraFrame& frame, const FrameResult& r, EkfSlam& /*filter*/) {
   last_update_ms_ = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - frame_tic_).count();
   if (!r.processed) {
     reportProblem("frame not processed: " + r.error);

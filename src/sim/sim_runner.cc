@@ -23,26 +23,30 @@ NavState trueNavState(const Trajectory& trajectory, double t) {
   return n;
 }
 
+namespace {
+/// `aligned` turned about the vertical by yaw_rad and moved to position p_n_b (what a start that
+/// knows neither position nor yaw is told); roll, pitch, body-frame velocity and biases stay.
+NavState placed(const NavState& aligned, double yaw_rad, const Vec3& p_n_b) {
+  const Quat R_z(Eigen::AngleAxisd(yaw_rad, Vec3::UnitZ()));
+  NavState r = aligned;
+  r.q_n_b = (R_z * aligned.q_n_b).normalized();
+  r.v_n_b = R_z * aligned.v_n_b;
+  r.p_n_b = p_n_b;
+  return r;
+}
+}  // namespace
+
 NavState registerToTruth(const NavState& aligned, const NavState& truth, const InitialUncertainty& u,
                          std::mt19937_64& rng) {
   std::normal_distribution<double> n(0.0, 1.0);
   const double yaw_error = u.yaw_rad * n(rng);
-  const Quat R_z(Eigen::AngleAxisd(yawBetween(aligned.q_n_b, truth.q_n_b) - yaw_error, Vec3::UnitZ()));
-  NavState r = aligned;
-  r.q_n_b = (R_z * aligned.q_n_b).normalized();
-  r.v_n_b = R_z * aligned.v_n_b;
   const double x = n(rng), y = n(rng), z = n(rng);
-  r.p_n_b = truth.p_n_b - u.position_m * Vec3(x, y, z);
-  return r;
+  return placed(aligned, yawBetween(aligned.q_n_b, truth.q_n_b) - yaw_error,
+                truth.p_n_b - u.position_m * Vec3(x, y, z));
 }
 
 NavState continueFrom(const NavState& aligned, const NavState& last) {
-  const Quat R_z(Eigen::AngleAxisd(yawBetween(aligned.q_n_b, last.q_n_b), Vec3::UnitZ()));
-  NavState r = aligned;
-  r.q_n_b = (R_z * aligned.q_n_b).normalized();
-  r.v_n_b = R_z * aligned.v_n_b;
-  r.p_n_b = last.p_n_b;
-  return r;
+  return placed(aligned, yawBetween(aligned.q_n_b, last.q_n_b), last.p_n_b);
 }
 
 std::string toString(SensorFault::Kind kind) {
@@ -95,9 +99,8 @@ namespace {
 /// The simulator's side of the pipeline: records every frame with the truth at its time.
 class RunRecorder : public PipelineListener {
  public:
-  RunRecorder(const Scenario& sc, const ImuSequence& imu, VioPipeline*& pipeline, const FrameCallback& callback,
-              bool keep_frames, SimRun* run)
-      : sc_(sc), imu_(imu), pipeline_(pipeline), callback_(callback), keep_frames_(keep_frames), run_(run) {}
+  RunRecorder(const Scenario& sc, const ImuSequence& imu, const FrameCallback& callback, bool keep_frames, SimRun* run)
+      : sc_(sc), imu_(imu), callback_(callback), keep_frames_(keep_frames), run_(run) {}
   /// Index of the IMU sample the stream has reached (the truth's biases there).
   size_t imu_index = 0;
   /// When the pipeline call that may process frames began (their wall time is counted from it).
@@ -107,10 +110,11 @@ class RunRecorder : public PipelineListener {
   std::optional<NavState> last_estimate;
   bool lost_before = false;  ///< the filter was lost since the run began
 
-  void started(const std::string& /*event*/) override { run_->initialized_t = pipeline_->filter().state().timestamp; }
+  void started(StartKind /*kind*/, const std::string& /*event*/, EkfSlam& filter) override {
+    run_->initialized_t = filter.state().timestamp;
+  }
   void lost(const std::string& /*why*/) override { lost_before = true; }
-  void processed(const CameraFrame& frame, const FrameResult& r) override {
-    EkfSlam& filter = pipeline_->filter();
+  void processed(const CameraFrame& frame, const FrameResult& r, EkfSlam& filter) override {
     FrameRecord rec;
     rec.result = r;
     rec.filter_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - tic).count();
@@ -131,7 +135,6 @@ class RunRecorder : public PipelineListener {
  private:
   const Scenario& sc_;
   const ImuSequence& imu_;
-  VioPipeline*& pipeline_;
   const FrameCallback& callback_;
   bool keep_frames_;
   SimRun* run_;
@@ -201,10 +204,8 @@ SimRun runSimulation(const Scenario& sc, const EkfSlamConfig& config, const NavS
   SensorStream stream(sc, initial.timestamp, rng);
   const ImuSequence& imu = stream.imu();
   SimRun run;
-  VioPipeline* pipeline_ptr = nullptr;
-  RunRecorder recorder(sc, imu, pipeline_ptr, callback, keep_frames, &run);
+  RunRecorder recorder(sc, imu, callback, keep_frames, &run);
   VioPipeline pipeline(config, simulatedNodeStart(sc, config), sc.camera, sc.T_b_c, recorder);
-  pipeline_ptr = &pipeline;
   // A start from the initializers knows neither position nor yaw: it is registered to the truth's
   // with an error drawn from the filter's prior, as a prior start is. A start over after the filter
   // was lost continues from its last estimate, as the node's odometry does.

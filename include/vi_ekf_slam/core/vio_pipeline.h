@@ -33,22 +33,28 @@ struct QueuedFrame {
   std::function<CameraFrame(const std::optional<Mat3>& R_cur_prev)> features;
 };
 
+enum class StartKind {
+  kAtRest,  ///< the static initializer (the tracks start anew with the filter)
+  kMoving,  ///< the dynamic initializer (the tracks it aligned go on)
+};
+
 enum class FrameDrop {
   kLate,       ///< older than the filter's state (it arrived after the IMU had moved past it)
   kQueueFull,  ///< no IMU past its stamp while max_frame_queue newer frames waited
 };
 
-/// What the pipeline tells its driver. Every method has a default that ignores it.
+/// What the pipeline tells its driver, with the filter it runs. Every method has a default that
+/// ignores it.
 class PipelineListener {
  public:
   virtual ~PipelineListener() = default;
-  /// The filter started; `event` says how (static or dynamic, with the alignment's figures).
-  virtual void started(const std::string& /*event*/) {}
+  /// The filter started; `event` says how (with the initializer's figures).
+  virtual void started(StartKind /*kind*/, const std::string& /*event*/, EkfSlam& /*filter*/) {}
   /// Still waiting to start, and why.
   virtual void waiting(const std::string& /*why*/) {}
   virtual void dropped(FrameDrop /*why*/) {}
   /// A frame went through the filter (r.processed false: it could not, r.error says why).
-  virtual void processed(const CameraFrame& /*frame*/, const FrameResult& /*r*/) {}
+  virtual void processed(const CameraFrame& /*frame*/, const FrameResult& /*r*/, EkfSlam& /*filter*/) {}
   /// The filter was lost (or its state became non-finite) and the pipeline started over.
   virtual void lost(const std::string& /*why*/) {}
 };
@@ -89,13 +95,9 @@ class VioPipeline {
   void setRegistration(std::function<NavState(const NavState&)> registration) {
     registration_ = std::move(registration);
   }
-  /// Applies new start settings (dynamic_reconfigure); the running filter is not touched.
-  void setParams(const PipelineParams& params);
-
   /// The filter (hasCamera() must be true).
   EkfSlam& filter() { return *filter_; }
   const EkfSlam& filter() const { return *filter_; }
-  size_t queuedFrames() const { return queue_.size(); }
 
  private:
   void tryStatic(double t_now);
@@ -104,7 +106,6 @@ class VioPipeline {
   void process(QueuedFrame& frame);
   /// The state the filter starts from: the registration's, or `s` itself.
   NavState registered(const NavState& s) const { return registration_ ? registration_(s) : s; }
-  void started(const std::string& event, const Quat& q_n_b);
   void forgetStart();
 
   EkfSlamConfig config_;

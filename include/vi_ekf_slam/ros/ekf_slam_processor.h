@@ -134,10 +134,10 @@ class EkfSlamProcessor : private PipelineListener {
   void startOver(const std::string& reason);
 
   // PipelineListener: what the core pipeline decided.
-  void started(const std::string& event) override;
+  void started(StartKind kind, const std::string& event, EkfSlam& filter) override;
   void waiting(const std::string& why) override;
   void dropped(FrameDrop why) override;
-  void processed(const CameraFrame& frame, const FrameResult& r) override;
+  void processed(const CameraFrame& frame, const FrameResult& r, EkfSlam& filter) override;
   void lost(const std::string& why) override;
 
   NodeParams params_;
