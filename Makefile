@@ -184,14 +184,15 @@ initsuite: build
 # set's README trusts its first 15 s less). Tables, health and reference plots.
 REAL      := $(DATA_DIR)/dmvio_handheld
 REAL_BAG  := results/bags/dmvio_handheld.bag
-REAL_REFS := reference:=$(REAL)/reference/sfm_camera_poses.txt,$(REAL)/reference/openvins_imu_poses.txt,$(REAL)/reference/sfm_camera_poses.txt \
-             reference_frame:=camera,body,camera reference_clock:=camera,imu,camera reference_from_s:=0,0,15
+REAL_REFS := --reference $(REAL)/reference/sfm_camera_poses.txt --reference-frame camera --reference-clock camera --reference-from-s 0 \
+             --reference $(REAL)/reference/openvins_imu_poses.txt --reference-frame body --reference-clock imu --reference-from-s 0 \
+             --reference $(REAL)/reference/sfm_camera_poses.txt --reference-frame camera --reference-clock camera --reference-from-s 15
 $(REAL_BAG): $(BIN)/vi_ekf_slam_asl_to_bag
 	@mkdir -p $(dir $@)
 	$(BIN)/vi_ekf_slam_asl_to_bag --asl $(REAL)/mav0 --out $@
 realdata: build $(REAL_BAG)
-	source $(DEVEL)/setup.bash && $(BIN)/vi_ekf_slam_run_bag bag:=$(REAL_BAG) out:=results/realdata/defaults mechanization:=all $(REAL_REFS)
-	source $(DEVEL)/setup.bash && $(BIN)/vi_ekf_slam_run_bag bag:=$(REAL_BAG) out:=results/realdata/rig rig:=config/dmvio_handheld.yaml $(REAL_REFS)
+	source $(DEVEL)/setup.bash && $(BIN)/vi_ekf_slam_run_bag --bag $(REAL_BAG) --out results/realdata/defaults --mechanization all $(REAL_REFS)
+	source $(DEVEL)/setup.bash && $(BIN)/vi_ekf_slam_run_bag --bag $(REAL_BAG) --out results/realdata/rig --rig config/dmvio_handheld.yaml $(REAL_REFS)
 
 # Endurance: a 30-minute walk (laps) per mechanization through the core; error, map size and
 # resident memory over time (a 4-minute version runs in make test).

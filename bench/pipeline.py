@@ -40,8 +40,8 @@ def odom_latency_ms(bag_path, topic="/vi_ekf_slam/odom"):
 
 def offline(bag, out, summary_file, extra=()):
     """vi_ekf_slam_run_bag on one core; the default mechanization's entry of its summary file."""
-    subprocess.run(["taskset", "-c", "0", "rosrun", "vi_ekf_slam", "vi_ekf_slam_run_bag", "bag:=" + bag,
-                    "mechanization:=" + MECH, "out:=" + out, "plots:=false"] + list(extra),
+    subprocess.run(["taskset", "-c", "0", "rosrun", "vi_ekf_slam", "vi_ekf_slam_run_bag", "--bag", bag,
+                    "--mechanization", MECH, "--out", out, "--no-plots"] + list(extra),
                    check=True, stdout=subprocess.DEVNULL)
     with open(os.path.join(out, summary_file)) as f:
         return json.load(f)[MECH]
@@ -56,7 +56,7 @@ def main():
     a = ap.parse_args()
     os.makedirs(a.out, exist_ok=True)
     result = {}
-    s = offline(a.bag, os.path.join(a.out, "offline"), "summary.json", ["config:=" + a.config])
+    s = offline(a.bag, os.path.join(a.out, "offline"), "summary.json", ["--config", a.config])
     result["offline_real_time_factor_1core"] = round(s["real_time_factor"], 2)
     result["offline_ms_per_frame_mean"] = round(s["processing_ms_mean"], 2)
     result["offline_ms_per_frame_p95"] = round(s["processing_ms_p95"], 2)

@@ -86,8 +86,8 @@ def main():
             recorded.append("%s=%s" % (mech, replay(os.path.abspath(a.bag), mech, a.out, config, a.rviz, a.rate, log,
                                                     a.start)))
             print("  done in %.0f s" % (time.time() - t0), flush=True)
-    r = subprocess.run(["rosrun", "vi_ekf_slam", "vi_ekf_slam_run_bag", "bag:=" + a.bag, "recorded:=" + ",".join(recorded), "plots:=false",
-                        "out:=" + a.out], capture_output=True, text=True)
+    r = subprocess.run(["rosrun", "vi_ekf_slam", "vi_ekf_slam_run_bag", "--bag", a.bag, "--no-plots", "--out", a.out]
+                       + [x for r in recorded for x in ("--recorded", r)], capture_output=True, text=True)
     if r.returncode != 0:
         print(r.stdout, r.stderr)
         return 1

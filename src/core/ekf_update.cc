@@ -39,6 +39,59 @@ std::vector<MeasurementRows> rowsOf(const std::vector<AcceptedObservation>& acc,
 /// The iterations stop once the correction changes less than this (max over its entries: m,
 /// rad, m/s, 1/m, s).
 constexpr double kIterationTolerance = 1e-6;
+
+/// How a landmark is seen: its pixel, the Jacobians and the image velocity, at a state.
+struct ObservationModel {
+  const CameraModel& camera;
+  const CameraExtrinsics& T_b_c;
+  Vec3 omega_b;
+  double row_time_per_px;
+  /// Rolling shutter: when the row at v was read, relative to the state's time (the middle row).
+  /// First order, as the time offset: the prediction moves by the image velocity over it.
+  double rowTime(double v) const { return row_time_per_px * (v - 0.5 * camera.height()); }
+  /// a's Jacobians and residual at `state`, for a time offset dtd off the state's (the iterate's):
+  /// the pixel z seen at image time t_i belongs to the state at t_i + t_d; the filter is at
+  /// t_i + t_d_est, so z = h(x) + velocity * (t_d - t_d_est). False if it cannot be predicted.
+  bool linearize(const FilterState& state, double dtd, AcceptedObservation* a) const {
+    const auto li = state.findLandmark(a->id);
+    Eigen::Vector2d uv;
+    if (!li || !predictObservation(state.x, state.landmark(*li), camera, T_b_c, &uv, &a->J)) return false;
+    a->col = state.landmarkIndex(*li);
+    if (!predictImageVelocity(state.x, state.landmark(*li), camera, T_b_c, omega_b, &a->H_td)) a->H_td.setZero();
+    a->residual = a->measured - uv - a->H_td * (rowTime(a->measured.y()) + dtd);
+    return true;
+  }
+};
+
+/// Stage 1: every observation predicted, linearized and gated on its own 2-dof innovation; the
+/// outcome of each (invalid, rejected, outlier) into *result.
+std::vector<AcceptedObservation> gateObservations(const FilterState& state,
+                                                  const std::vector<FeatureObservation>& observations,
+                                                  const ObservationModel& model, const UpdateParams& params,
+                                                  UpdateResult* result) {
+  const double r_var = params.pixel_noise_px * params.pixel_noise_px;
+  const double gate = chiSquaredQuantile(params.gate_probability, 2.0);
+  const double outlier = chiSquaredQuantile(params.outlierProbability(), 2.0);
+  std::vector<AcceptedObservation> acc;
+  acc.reserve(observations.size());
+  for (const auto& obs : observations) {
+    AcceptedObservation a;
+    a.id = obs.id;
+    a.measured = obs.uv;
+    if (!obs.uv.allFinite() || !model.linearize(state, 0.0, &a)) {
+      result->invalid_ids.push_back(obs.id);
+      continue;
+    }
+    const double d2 = normalizedInnovation(state.covariance(), rowsOf(a, r_var));
+    if (!std::isfinite(d2) || d2 > outlier) ++result->outliers;
+    if (!std::isfinite(d2) || d2 > gate) {
+      result->rejected_ids.push_back(obs.id);
+      continue;
+    }
+    acc.push_back(a);
+  }
+  return acc;
+}
 }  // namespace
 
 UpdateResult ekfUpdate(FilterState& state, const std::vector<FeatureObservation>& observations,
@@ -46,40 +99,9 @@ UpdateResult ekfUpdate(FilterState& state, const std::vector<FeatureObservation>
                        const Vec3& omega_b) {
   UpdateResult result;
   const double r_var = params.pixel_noise_px * params.pixel_noise_px;
-  const double gate = chiSquaredQuantile(params.gate_probability, 2.0);
-  const double outlier = chiSquaredQuantile(params.outlierProbability(), 2.0);
-  const Eigen::MatrixXd& P0 = state.covariance();
-  // Rolling shutter: when the row at v was read, relative to the state's time (the middle row).
-  // First order, as the time offset: the prediction moves by the image velocity over it.
   const double row_time_per_px = camera.height() > 0 ? params.readout_time_s / camera.height() : 0.0;
-  auto rowTime = [&](double v) { return row_time_per_px * (v - 0.5 * camera.height()); };
-
-  // 1) Predict, linearize and gate every observation on its own 2-dof innovation.
-  std::vector<AcceptedObservation> acc;
-  acc.reserve(observations.size());
-  for (const auto& obs : observations) {
-    const auto li = state.findLandmark(obs.id);
-    Eigen::Vector2d uv;
-    AcceptedObservation a;
-    if (!li || !obs.uv.allFinite() || !predictObservation(state.x, state.landmark(*li), camera, T_b_c, &uv, &a.J)) {
-      result.invalid_ids.push_back(obs.id);
-      continue;
-    }
-    a.id = obs.id;
-    a.col = state.landmarkIndex(*li);
-    a.measured = obs.uv;
-    // The pixel z seen at image time t_i belongs to the state at t_i + t_d; the filter is at
-    // t_i + t_d_est, so z = h(x) + velocity * (t_d - t_d_est).
-    if (!predictImageVelocity(state.x, state.landmark(*li), camera, T_b_c, omega_b, &a.H_td)) a.H_td.setZero();
-    a.residual = obs.uv - uv - a.H_td * rowTime(obs.uv.y());
-    const double d2 = normalizedInnovation(P0, rowsOf(a, r_var));
-    if (!std::isfinite(d2) || d2 > outlier) ++result.outliers;
-    if (!std::isfinite(d2) || d2 > gate) {
-      result.rejected_ids.push_back(obs.id);
-      continue;
-    }
-    acc.push_back(a);
-  }
+  const ObservationModel model{camera, T_b_c, omega_b, row_time_per_px};
+  std::vector<AcceptedObservation> acc = gateObservations(state, observations, model, params, &result);
   result.accepted = static_cast<int>(acc.size());
   if (acc.empty()) return result;
 
@@ -120,14 +142,10 @@ UpdateResult ekfUpdate(FilterState& state, const std::vector<FeatureObservation>
     state.boxplus(dd);
     *cost = 0.0;
     for (auto& a : *obs) {
-      const auto li = state.findLandmark(a.id);
-      Eigen::Vector2d uv;
-      if (!li || !predictObservation(state.x, state.landmark(*li), camera, T_b_c, &uv, &a.J)) return false;
-      if (!predictImageVelocity(state.x, state.landmark(*li), camera, T_b_c, omega_b, &a.H_td)) a.H_td.setZero();
       // The state stays propagated to the prior's time offset: the iterate's offset moves the
       // prediction through the image velocity, as the linear model says (leaving it out counted
       // H_td d_td once more at every iteration).
-      a.residual = a.measured - uv - a.H_td * (rowTime(a.measured.y()) + dd(idx::kTd));
+      if (!model.linearize(state, dd(idx::kTd), &a)) return false;
       *cost += a.residual.squaredNorm() / r_var;
     }
     return true;

@@ -1,5 +1,6 @@
 #include "vi_ekf_slam/core/vio_pipeline.h"
 
+#include <chrono>
 #include <sstream>
 #include <stdexcept>
 
@@ -32,6 +33,7 @@ void VioPipeline::setCamera(const CameraModel& camera, const CameraExtrinsics& T
 }
 
 void VioPipeline::clearCamera() {
+  attempt_.reset();
   filter_.reset();
   dynamic_init_.reset();
   first_frame_t_.reset();
@@ -47,6 +49,7 @@ bool VioPipeline::setConfig(const EkfSlamConfig& config, std::string* error) {
 }
 
 void VioPipeline::forgetStart() {
+  attempt_.reset();  // waits for a worker still running (it works on its own copy)
   static_init_.reset();
   at_rest_.reset();
   if (dynamic_init_) dynamic_init_->reset();
@@ -75,6 +78,7 @@ void VioPipeline::addImu(const ImuData& imu) {
   if (!filter_ || (!camera_running_ && !filter_->initialized())) return;
   if (!filter_->initialized()) dynamic_init_->addImu(imu);
   filter_->addImu(imu);
+  takeFinishedAttempt();
   tryStatic(imu.timestamp);
   processQueue();
 }
@@ -96,6 +100,7 @@ void VioPipeline::tryStatic(double t_now) {
 void VioPipeline::addFrame(QueuedFrame frame) {
   if (!filter_) return;
   camera_running_ = true;
+  takeFinishedAttempt();  // a start found meanwhile takes this frame as its first
   if (!filter_->initialized()) {
     tryDynamic(frame);
     return;
@@ -123,19 +128,46 @@ void VioPipeline::tryDynamic(QueuedFrame& frame) {
   CameraFrame features = frame.features(std::nullopt);
   features.timestamp = filter_->imuTime(frame.t);
   dynamic_init_->addFrame(features);
-  std::string why;
-  const std::optional<DynamicInitResult> r = dynamic_init_->tryInitialize(&why);
+  if (!params_.background_start_attempts) {
+    std::string why;
+    const std::optional<DynamicInitResult> r = dynamic_init_->tryInitialize(&why);
+    startMoving(r, why, frame.t);
+    return;
+  }
+  if (attempt_) return;  // the frame waits in the initializer's window for the next attempt
+  attempt_.emplace();
+  attempt_->frame_t = frame.t;
+  attempt_->outcome = std::async(std::launch::async, [init = *dynamic_init_]() mutable {
+    std::string why;
+    std::optional<DynamicInitResult> r = init.tryInitialize(&why);
+    return std::make_pair(std::move(r), why);
+  });
+}
+
+bool VioPipeline::takeFinishedAttempt() {
+  if (!attempt_ || attempt_->outcome.wait_for(std::chrono::seconds(0)) != std::future_status::ready) return false;
+  const auto [r, why] = attempt_->outcome.get();
+  const double frame_t = attempt_->frame_t;
+  attempt_.reset();
+  return startMoving(r, why, frame_t);
+}
+
+void VioPipeline::waitForStartAttempt() {
+  if (attempt_) attempt_->outcome.wait();
+}
+
+bool VioPipeline::startMoving(const std::optional<DynamicInitResult>& r, const std::string& why, double frame_t) {
   if (!r) {
     std::ostringstream w;
     w << "waiting to initialize: at rest for " << params_.static_init.window_s << " s, or moving: " << why;
     listener_.waiting(w.str());
-    return;
+    return false;
   }
-  if (r->state.timestamp < filter_->latestImuTime() - kMaxStartAgeS) return;
+  if (r->state.timestamp < filter_->latestImuTime() - kMaxStartAgeS) return false;
   const int added = filter_->initialize(*r, registered(r->state));
   std::ostringstream e;
   e.precision(3);
-  e << "initialized: dynamic, " << (frame.t - *first_frame_t_) << " s after the first image (" << r->frames
+  e << "initialized: dynamic, " << (frame_t - *first_frame_t_) << " s after the first image (" << r->frames
     << " images, " << r->features << " features, " << added << " landmarks, median depth " << r->median_depth_m
     << " m, scale sigma " << 100.0 * r->scale_sigma << "%, velocity sigma " << r->velocity_sigma_mps
     << " m/s, roll/pitch sigma " << r->tilt_sigma_rad << " rad, time offset "
@@ -143,6 +175,7 @@ void VioPipeline::tryDynamic(QueuedFrame& frame) {
   forgetStart();
   prev_q_n_b_ = filter_->navState().q_n_b;
   listener_.started(StartKind::kMoving, e.str(), *filter_);
+  return true;
 }
 
 void VioPipeline::processQueue() {
@@ -159,6 +192,7 @@ void VioPipeline::processQueue() {
 }
 
 void VioPipeline::flush() {
+  takeFinishedAttempt();
   while (!queue_.empty() && filter_ && filter_->initialized()) {
     QueuedFrame f = std::move(queue_.front());
     queue_.pop_front();

@@ -25,6 +25,9 @@ EkfSlamRos::EkfSlamRos(ros::NodeHandle nh, ros::NodeHandle pnh) : nh_(nh), pnh_(
     t.transform.rotation.w = 1.0;
     static_broadcaster_.sendTransform(t);
   }
+  // Live: the sensor callbacks never wait for a moving-start attempt (it can take longer than a
+  // camera period).
+  params.background_start_attempts = true;
   processor_ = std::make_unique<EkfSlamProcessor>(params, *this, &tf_buffer_);
 
   updater_.setHardwareID("vi_ekf_slam");

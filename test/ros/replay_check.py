@@ -110,7 +110,7 @@ class ReplayCheck(unittest.TestCase):
         if rospy.get_param("~compare_offline", False):
             out = os.path.join(tmp, "offline")
             cfg = rospy.get_param("~offline_args", "").split()
-            subprocess.run(["rosrun", PKG, "vi_ekf_slam_run_bag", "bag:=" + bag, "out:=" + out, "plots:=false"] + cfg,
+            subprocess.run(["rosrun", PKG, "vi_ekf_slam_run_bag", "--bag", bag, "--out", out, "--no-plots"] + cfg,
                            check=True, stdout=subprocess.PIPE)
             tum = [f for f in os.listdir(out) if f.endswith(".tum")][0]
             offline = {}

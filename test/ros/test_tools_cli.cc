@@ -99,35 +99,35 @@ TEST(ToolsCli, RunBagPicksTopicsAndReadsCompressedImages) {
   }
   const Outcome help = run(std::string(VI_TOOL_RUN_BAG) + " --help");
   EXPECT_EQ(help.code, 0) << help.output;
-  EXPECT_NE(help.output.find("image_topic:="), std::string::npos) << help.output;
+  EXPECT_NE(help.output.find("--image-topic"), std::string::npos) << help.output;
   const std::string base =
-      std::string(VI_TOOL_RUN_BAG) + " bag:=" + dir + "/user.bag out:=" + dir + "/out plots:=false";
+      std::string(VI_TOOL_RUN_BAG) + " --bag " + dir + "/user.bag --out " + dir + "/out --no-plots";
   const Outcome ambiguous = run(base);
   EXPECT_EQ(ambiguous.code, 2) << ambiguous.output;
   EXPECT_NE(ambiguous.output.find("/imu/data_raw"), std::string::npos) << ambiguous.output;
-  EXPECT_NE(ambiguous.output.find("imu_topic:="), std::string::npos) << ambiguous.output;
-  const Outcome ok = run(base + " imu_topic:=/imu/data");
+  EXPECT_NE(ambiguous.output.find("--imu-topic"), std::string::npos) << ambiguous.output;
+  const Outcome ok = run(base + " --imu-topic /imu/data");
   EXPECT_EQ(ok.code, 0) << ok.output;
   // The compressed images reached the filter: it initialized and tracked (no "0 images").
   EXPECT_NE(ok.output.find("sensor_centric_composition: "), std::string::npos) << ok.output;
   EXPECT_EQ(ok.output.find(": 0 images"), std::string::npos) << ok.output;
   EXPECT_EQ(ok.output.find("not decoded"), std::string::npos) << ok.output;
-  // A rig file on top of the defaults (make realdata's rig:=), and a parameter on the command line.
+  // A rig file on top of the defaults (make realdata's --rig), and a parameter on the command line.
   std::ofstream(dir + "/rig.yaml") << "max_landmarks: 120\n";
-  const Outcome rig = run(base + " imu_topic:=/imu/data rig:=" + dir + "/rig.yaml mechanization:=world_centric");
+  const Outcome rig = run(base + " --imu-topic /imu/data --rig " + dir + "/rig.yaml --mechanization world_centric");
   EXPECT_EQ(rig.code, 0) << rig.output;
   EXPECT_NE(rig.output.find("world_centric: "), std::string::npos) << rig.output;
-  const Outcome typo = run(base + " imu_topic:=/imu/data max_landmark:=120");
+  const Outcome typo = run(base + " --imu-topic /imu/data --param max_landmark=120");
   EXPECT_EQ(typo.code, 1) << typo.output;
   EXPECT_NE(typo.output.find("max_landmarks"), std::string::npos) << typo.output;
-  // A reference trusted only from some seconds on (reference_from_s:=): the run's own trajectory
+  // A reference trusted only from some seconds on (--reference-from-s): the run's own trajectory
   // as the reference, whole and from 4 s of the 8 s bag on (poses from 1 s, after the static start):
   // fewer poses compared, each matching itself.
   const std::string own = dir + "/own.tum";
   ASSERT_EQ(run("cp " + dir + "/out/world_centric.tum " + own).code, 0);
   const Outcome refs =
-      run(base + " imu_topic:=/imu/data rig:=" + dir + "/rig.yaml mechanization:=world_centric reference:=" + own +
-          "," + own + " reference_from_s:=0,4");
+      run(base + " --imu-topic /imu/data --rig " + dir + "/rig.yaml --mechanization world_centric --reference " + own +
+          " --reference " + own + " --reference-from-s 0 --reference-from-s 4");
   EXPECT_EQ(refs.code, 0) << refs.output;
   // What run_bag wrote for the two comparisons (health.json: one entry per reference).
   const nlohmann::json refs_json =
@@ -140,9 +140,9 @@ TEST(ToolsCli, RunBagPicksTopicsAndReadsCompressedImages) {
   EXPECT_LT(refs_json[1]["position_rmse_m"].get<double>(), 1e-6) << refs_json.dump();
   EXPECT_NE(refs.output.find("imu clock, from 4 s): " + std::to_string(from_4) + " matched"), std::string::npos)
       << refs.output;
-  const Outcome negative = run(base + " imu_topic:=/imu/data reference:=" + own + " reference_from_s:=-1");
+  const Outcome negative = run(base + " --imu-topic /imu/data --reference " + own + " --reference-from-s -1");
   EXPECT_EQ(negative.code, 2) << negative.output;
-  EXPECT_NE(negative.output.find("reference_from_s"), std::string::npos) << negative.output;
+  EXPECT_NE(negative.output.find("--reference-from-s"), std::string::npos) << negative.output;
 }
 
 // The suite runs on whatever trajectories a user drops into DATA_DIR/trajectories: a file the
@@ -280,11 +280,11 @@ TEST(ToolsCli, TheReadmeQuotesTheResultsPage) {
 
 // run_bag finds its default configuration as a ROS tool finds a package (devel or install space),
 // never in the source tree it was built from: without the package on ROS_PACKAGE_PATH and without
-// config:= it says so and stops.
+// --config it says so and stops.
 TEST(ToolsCli, RunBagFindsItsDefaultsThroughThePackageNotTheSourceTree) {
   const std::string empty = ::testing::TempDir() + "no_packages";
-  const Outcome o =
-      run("mkdir -p " + empty + " && env ROS_PACKAGE_PATH=" + empty + " " + VI_TOOL_RUN_BAG + " bag:=/nonexistent.bag");
+  const Outcome o = run("mkdir -p " + empty + " && env ROS_PACKAGE_PATH=" + empty + " " + VI_TOOL_RUN_BAG +
+                        " --bag /nonexistent.bag");
   EXPECT_EQ(o.code, 2) << o.output;
   EXPECT_NE(o.output.find("ROS_PACKAGE_PATH"), std::string::npos) << o.output;
 }

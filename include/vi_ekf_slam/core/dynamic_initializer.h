@@ -4,12 +4,9 @@
 // Martinelli's closed-form solution). With the attitude from the gyro and the IMU's position
 // increments alpha_k (A_k = d alpha_k / d b_a), the camera at frame k sees feature f at
 //   p_c = R_c_k (p_f - v_0 t_k - g t_k^2 / 2 - alpha_k - A_k b_a) - R_b_c^T p_b_c.
-// 1. Linear: each normalized observation (x, y) gives two equations linear in (p_f, v_0, g)
-//    (b_a = 0): p_c.x - x p_c.z = 0, p_c.y - y p_c.z = 0; |g| imposed by a Lagrange multiplier.
-// 2. Refined: Levenberg-Marquardt on the reprojection error (Huber), with b_a under its prior and
-//    |g| on its sphere: the linear solution is biased (errors in variables).
-// 3. The camera-IMU time offset: the best refined alignment over a grid, then golden section,
-//    under the offset's prior.
+// The stages, each in core/alignment/: track selection, IMU preintegration, the alignment problem
+// (linear solution, then refinement on the reprojection error), the camera-IMU time-offset
+// search, and the uncertainty.
 // The covariance of the solution (features eliminated) gives the initial uncertainty of velocity,
 // roll/pitch and accelerometer bias with their correlations; when the velocity or the tilt is
 // known too poorly (the rig rotates in place, moves at constant velocity, or sees too little

@@ -7,6 +7,7 @@
 
 #include <deque>
 #include <functional>
+#include <future>
 #include <memory>
 #include <optional>
 #include <string>
@@ -22,6 +23,12 @@ struct PipelineParams {
   bool dynamic_init_enabled = true;  ///< also start while moving (visual-inertial alignment)
   DynamicInitParams dynamic_init;    ///< with the filter's settings (withFilterSettings)
   int max_frame_queue = 20;          ///< frames waiting for the IMU beyond this are dropped [count]
+  /// Each moving-start attempt on a worker thread: the live node's choice, as an attempt can take
+  /// longer than a camera period and the sensor callbacks must not wait for it (the frames that
+  /// arrive meanwhile go to the initializer, the next attempt starts with the newest). An attempt
+  /// that ends before the next frame gives the same start as inline. false: inline, every frame
+  /// tried in turn, reproducible (offline runs, the simulator).
+  bool background_start_attempts = false;
 };
 
 /// A camera frame on its way to the filter: its stamp and how to get its features. The features
@@ -89,6 +96,11 @@ class VioPipeline {
   void flush();
   /// Forgets state, map, queue and the start policy's windows; starts again at rest or moving.
   void reset();
+  /// Background attempts: blocks until the one in flight (if any) has ended; the next sample or
+  /// frame takes its outcome (offline drivers and tests that want an attempt per frame).
+  void waitForStartAttempt();
+  /// Background attempts: whether one is in flight.
+  bool startAttemptInFlight() const { return attempt_.has_value(); }
 
   /// How a start's state is placed in the world before the filter takes it (the simulator
   /// registers it to the truth's position and yaw; none: as the initializer gives it).
@@ -102,6 +114,10 @@ class VioPipeline {
  private:
   void tryStatic(double t_now);
   void tryDynamic(QueuedFrame& frame);
+  /// An attempt's outcome: the filter starts (true) or the listener hears why it waits.
+  bool startMoving(const std::optional<DynamicInitResult>& r, const std::string& why, double frame_t);
+  /// Takes a background attempt's outcome if it has ended (true: the filter started).
+  bool takeFinishedAttempt();
   void processQueue();
   void process(QueuedFrame& frame);
   /// The state the filter starts from: the registration's, or `s` itself.
@@ -120,6 +136,11 @@ class VioPipeline {
   std::optional<Quat> prev_q_n_b_;  ///< attitude at the previous frame (the gyro's rotation seed)
   bool camera_running_ = false;     ///< a frame has arrived since setCamera()
   std::function<NavState(const NavState&)> registration_;
+  struct StartAttempt {
+    double frame_t = 0.0;  ///< the stamp of the frame it was launched at (camera clock) [s]
+    std::future<std::pair<std::optional<DynamicInitResult>, std::string>> outcome;
+  };
+  std::optional<StartAttempt> attempt_;  ///< background attempts: the one in flight
 };
 
 }  // namespace vi_ekf_slam

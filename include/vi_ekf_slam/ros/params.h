@@ -48,6 +48,8 @@ struct NodeParams {
   bool dynamic_init_enabled = true;  ///< also initialize while moving (visual-inertial alignment)
   DynamicInitParams dynamic_init;
   NodeOptions node;
+  /// Not a parameter: the live node sets it, the offline runner does not (PipelineParams).
+  bool background_start_attempts = false;
 };
 
 /// Where parameters come from: the parameter server (the node) or YAML files (offline tools).

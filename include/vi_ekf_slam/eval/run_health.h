@@ -1,0 +1,39 @@
+// What a run says about itself without ground truth: path length, speed, tracks, observations,
+// NIS, time offset, resets and time per image (health.json / health.md and the per-image trace of
+// the offline bag runner). ROS-free: the runner converts its status messages to StatusSample.
+#pragma once
+
+#include <nlohmann/json.hpp>
+#include <string>
+#include <vector>
+
+#include "vi_ekf_slam/core/so3.h"
+
+namespace vi_ekf_slam::eval {
+
+/// The filter's status after one processed image (the FilterStatus message's figures).
+struct StatusSample {
+  double t = 0.0;         ///< [s] IMU clock
+  Vec3 p = Vec3::Zero();  ///< [m] body position in the output frame
+  int tracks = 0;
+  int accepted = 0, rejected = 0;  ///< observations of the update
+  double nis_per_dof = 0.0;
+  double time_offset_s = 0.0, time_offset_sigma_s = 0.0;
+  int resets = 0;  ///< since the start
+  double processing_ms = 0.0, tracker_ms = 0.0;
+  int landmarks = 0, new_landmarks = 0, deferred = 0, removed = 0;
+  bool stationary = false;
+};
+
+/// The health of one run: samples of every processed image (across resets), the resets, the
+/// input's duration and the wall time it took [s].
+nlohmann::json runHealth(const std::vector<StatusSample>& samples, int resets, double input_s, double wall_s);
+/// One run's health as two lines of text.
+std::string healthLine(const std::string& name, const nlohmann::json& h);
+/// The runs' health (keyed by name; "config" is skipped) as a Markdown table, with the first
+/// reference comparison's figures where present.
+std::string healthTable(const nlohmann::json& health);
+/// Every sample as CSV.
+void writeTrace(const std::string& path, const std::vector<StatusSample>& samples);
+
+}  // namespace vi_ekf_slam::eval

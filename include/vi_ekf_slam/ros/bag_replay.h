@@ -1,0 +1,55 @@
+// The offline replay of a bag through the node's own processor: messages in bag order, no
+// threads, no master, as fast as the CPU allows (vi_ekf_slam_run_bag), and what the processor
+// outputs, kept for the evaluation.
+#pragma once
+
+#include <map>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include <tf2/buffer_core.h>
+
+#include "vi_ekf_slam/eval/run_evaluation.h"
+#include "vi_ekf_slam/eval/run_health.h"
+#include "vi_ekf_slam/ros/bag_io.h"
+#include "vi_ekf_slam/ros/ekf_slam_processor.h"
+
+namespace vi_ekf_slam::glue {
+
+/// Keeps what the processor outputs. A reset starts a new estimate frame (the filter's world, as
+/// the runner asks for): the poses and the map of the last one are kept.
+class RecordingSink : public OutputSink {
+ public:
+  std::vector<eval::EstimatedPose> poses;
+  std::map<std::int64_t, eval::EstimatedLandmark> map;
+  std::vector<std::string> events;
+  std::vector<eval::StatusSample> trace;  ///< every processed image, across resets
+  int resets = 0;
+
+  void odometry(const nav_msgs::Odometry& o) override;
+  void landmarks(const std::vector<LandmarkOutput>& lms, const ros::Time&) override;
+  void status(const vi_ekf_slam::FilterStatus& s) override;
+  void event(const std::string& text) override;
+};
+
+/// The topics the processor is fed from.
+struct InputTopics {
+  std::string imu, image, camera_info;
+};
+
+/// The topics as requested (checked against the bag), or the one topic of each type the bag holds;
+/// several, or none, is an error (std::runtime_error) that lists them. camera_info is optional.
+InputTopics chooseInputTopics(const std::string& bag_path, const std::optional<std::string>& imu,
+                              const std::optional<std::string>& image, const std::optional<std::string>& camera_info);
+
+/// Feeds the bag's IMU, images (raw or compressed), camera_info and TF to the processor in bag
+/// order; returns the wall time it took [s].
+double replayBag(const std::string& bag_path, const InputTopics& topics, EkfSlamProcessor& processor,
+                 tf2::BufferCore& tf);
+
+/// A recording of the node's outputs (odom, status, landmarks) evaluated against the input bag's
+/// ground truth; *mean_tracks: tracks per image.
+eval::RunMetrics evaluateRecording(const std::string& path, const InputBagInfo& info, double* mean_tracks);
+
+}  // namespace vi_ekf_slam::glue
