@@ -390,54 +390,45 @@ std::string configSets(const std::string& name, size_t index) {
   return sets.empty() ? "-" : sets;
 }
 
-int main(int argc, char** argv) {
-  tuneAllocatorForLargeBuffers();
-  const Options o = parse(argc, argv);
-  if (o.list_configs) {
-    Options all = o;
-    all.configs = "all";
-    const auto configs = makeConfigs(all, sim::Scenario());
-    for (size_t i = 0; i < configs.size(); ++i) {
-      std::printf("%s %s\n", configs[i].first.c_str(), configSets(configs[i].first, i).c_str());
-    }
-    return 0;
-  }
+/// The scenario the options describe, with *name for the reports (exits with usage on a bad
+/// combination; throws when a file cannot be read).
+sim::Scenario loadScenario(const Options& o, std::string* name) {
+  *name = "builtin_hallway_walk";
   sim::Scenario sc;
-  std::string traj_name = "builtin_hallway_walk";
-  try {
-    if (o.preset == "openvins_sim") {
-      sc = sim::openvinsSimScenario(o.trajectory, o.seed);
-      traj_name = fs::path(o.trajectory).filename().string() + " (openvins_sim)";
-    } else if (!o.imu.empty()) {
-      if (o.trajectory == "builtin") usage("--imu needs the ground truth of the same recording as --trajectory");
-      sc = sim::recordedImuScenario(o.trajectory, o.imu, o.per_metre, o.seed);
-      if (o.imu_noise == "euroc_mav") sc.imu.noise = eval::eurocMavImuNoise();
-      traj_name = fs::path(o.trajectory).filename().string() + " + recorded IMU";
-    } else if (o.trajectory == "builtin") {
-      sc = sim::hallwayScenario(sim::HallwayParams(), o.density, o.seed);
-    } else {
-      sc = sim::tumScenario(o.trajectory, o.per_metre, o.seed);
-      traj_name = fs::path(o.trajectory).filename().string();
-    }
-  } catch (const std::exception& e) {
-    std::cerr << "error: " << e.what() << "\n";
-    return 1;
+  if (o.preset == "openvins_sim") {
+    sc = sim::openvinsSimScenario(o.trajectory, o.seed);
+    *name = fs::path(o.trajectory).filename().string() + " (openvins_sim)";
+  } else if (!o.imu.empty()) {
+    if (o.trajectory == "builtin") usage("--imu needs the ground truth of the same recording as --trajectory");
+    sc = sim::recordedImuScenario(o.trajectory, o.imu, o.per_metre, o.seed);
+    if (o.imu_noise == "euroc_mav") sc.imu.noise = eval::eurocMavImuNoise();
+    *name = fs::path(o.trajectory).filename().string() + " + recorded IMU";
+  } else if (o.trajectory == "builtin") {
+    sc = sim::hallwayScenario(sim::HallwayParams(), o.density, o.seed);
+  } else {
+    sc = sim::tumScenario(o.trajectory, o.per_metre, o.seed);
+    *name = fs::path(o.trajectory).filename().string();
   }
   if (!o.init.empty()) sc.start_at_truth = o.init == "truth";
   if (o.init == "dynamic") sc.dynamic_init = DynamicInitParams();
   sc.draw_imu_biases = o.imu_biases == "drawn";
-  // One scenario per start offset (the same world and sensors, another window of the path).
-  std::vector<double> offsets = o.start_offsets;
+  return sc;
+}
+
+/// One scenario per start offset (the same world and sensors, another window of the path); the
+/// offsets used into *offsets.
+std::vector<sim::Scenario> startScenarios(const Options& o, const sim::Scenario& sc, std::vector<double>* offsets) {
+  *offsets = o.start_offsets;
   if (o.random_starts > 0) {
     const double span = sc.trajectory->endTime() - sc.trajectory->startTime() - o.max_duration;
     if (!(span > 0.0)) usage("--random-starts: the trajectory is shorter than --max-duration");
     std::mt19937_64 rng(o.seed);
     std::uniform_real_distribution<double> u(0.0, span);
-    offsets.clear();
-    for (int i = 0; i < o.random_starts; ++i) offsets.push_back(std::round(10.0 * u(rng)) / 10.0);
+    offsets->clear();
+    for (int i = 0; i < o.random_starts; ++i) offsets->push_back(std::round(10.0 * u(rng)) / 10.0);
   }
   std::vector<sim::Scenario> scenarios;
-  for (double offset : offsets) {
+  for (double offset : *offsets) {
     sim::Scenario s = sc;
     if (o.max_duration > 0.0 || offset > 0.0) {
       const double start = sc.trajectory->startTime() + offset;
@@ -448,16 +439,15 @@ int main(int argc, char** argv) {
     }
     scenarios.push_back(s);
   }
-  sc = scenarios.front();
-  const auto configs = makeConfigs(o, sc);
-  const double duration = sc.trajectory->endTime() - std::max(0.0, sc.trajectory->startTime());
-  std::ostringstream starts;
-  for (size_t i = 0; i < offsets.size(); ++i) starts << (i ? "," : "") << offsets[i];
-  std::printf("study: %s, %.1f s from %s s, %zu landmarks in the world, %d runs x %zu configurations, %d threads\n",
-              traj_name.c_str(), duration, starts.str().c_str(), sc.world.size(), o.runs, configs.size(), o.threads);
+  return scenarios;
+}
 
-  // All (configuration, run) jobs on a small thread pool. Run r uses seed + r for every
-  // configuration (common random numbers: the same noise for each filter).
+using Configs = std::vector<std::pair<std::string, EkfSlamConfig>>;
+
+/// All (configuration, run) jobs on a small thread pool. Run r uses seed + r for every
+/// configuration (common random numbers: the same noise for each filter).
+std::vector<std::vector<sim::RunResult>> runAll(const Options& o, const Configs& configs,
+                                                const std::vector<sim::Scenario>& scenarios) {
   std::vector<std::vector<sim::RunResult>> results(configs.size(),
                                                    std::vector<sim::RunResult>(static_cast<size_t>(o.runs)));
   std::atomic<int> next{0};
@@ -477,21 +467,13 @@ int main(int argc, char** argv) {
   for (int i = 0; i < o.threads; ++i) pool.emplace_back(worker);
   for (auto& t : pool) t.join();
   std::fprintf(stderr, "\n");
+  return results;
+}
 
-  const fs::path out(o.out);
-  fs::create_directories(out);
-  {
-    std::ofstream w(out / "world.csv");
-    w << "id,x,y,z\n";
-    for (const auto& l : sc.world) w << l.id << "," << l.p_n.x() << "," << l.p_n.y() << "," << l.p_n.z() << "\n";
-  }
-  std::vector<sim::ConsistencySummary> sums;
-  for (size_t c = 0; c < configs.size(); ++c) {
-    sums.push_back(sim::summarize(configs[c].first, results[c]));
-    writeConfigFiles(out / configs[c].first, sums.back(), results[c], sc, o.all_runs);
-  }
-
-  // summary.json: each configuration name -> metrics, plus the settings used (non-finite: null).
+/// summary.json: each configuration name -> metrics, plus the settings used (non-finite: null).
+nlohmann::ordered_json summaryJson(const Options& o, const std::string& traj_name, const sim::Scenario& sc,
+                                   const std::vector<double>& offsets, double duration, const Configs& configs,
+                                   const std::vector<sim::ConsistencySummary>& sums) {
   nlohmann::ordered_json js;
   js["config"] = {{"trajectory", traj_name},
                   {"seed", o.seed},
@@ -539,8 +521,12 @@ int main(int argc, char** argv) {
                   {"init_delay_s", s.init_delay_s},
                   {"ate_posyaw_runs_m", s.ate_posyaw_runs_m}};
   }
-  std::ofstream(out / "summary.json") << js.dump(2) << "\n";
+  return js;
+}
 
+/// summary.md: the consistency table and, for dynamic starts, the start delays.
+std::string summaryMarkdown(const Options& o, const std::string& traj_name, const sim::Scenario& sc, double duration,
+                            const std::vector<sim::ConsistencySummary>& sums) {
   std::ostringstream md;
   md << "# Study: " << traj_name << " (" << o.runs << " runs, seed " << o.seed << ", " << std::fixed
      << std::setprecision(1) << duration << " s, " << sums[0].distance_m << " m)\n\n"
@@ -576,7 +562,60 @@ int main(int argc, char** argv) {
          << s.nees_pose_early << " |\n";
     }
   }
-  std::ofstream(out / "summary.md") << md.str();
-  std::cout << "\n" << md.str() << "\nwritten to " << out << "\n";
+  return md.str();
+}
+
+/// --list-configs: every configuration's name and the sets it belongs to.
+void listConfigs(Options all) {
+  all.configs = "all";
+  const auto configs = makeConfigs(all, sim::Scenario());
+  for (size_t i = 0; i < configs.size(); ++i) {
+    std::printf("%s %s\n", configs[i].first.c_str(), configSets(configs[i].first, i).c_str());
+  }
+}
+
+int main(int argc, char** argv) {
+  tuneAllocatorForLargeBuffers();
+  const Options o = parse(argc, argv);
+  if (o.list_configs) {
+    listConfigs(o);
+    return 0;
+  }
+  std::string traj_name;
+  sim::Scenario sc;
+  try {
+    sc = loadScenario(o, &traj_name);
+  } catch (const std::exception& e) {
+    std::cerr << "error: " << e.what() << "\n";
+    return 1;
+  }
+  std::vector<double> offsets;
+  const std::vector<sim::Scenario> scenarios = startScenarios(o, sc, &offsets);
+  sc = scenarios.front();
+  const Configs configs = makeConfigs(o, sc);
+  const double duration = sc.trajectory->endTime() - std::max(0.0, sc.trajectory->startTime());
+  std::ostringstream starts;
+  for (size_t i = 0; i < offsets.size(); ++i) starts << (i ? "," : "") << offsets[i];
+  std::printf("study: %s, %.1f s from %s s, %zu landmarks in the world, %d runs x %zu configurations, %d threads\n",
+              traj_name.c_str(), duration, starts.str().c_str(), sc.world.size(), o.runs, configs.size(), o.threads);
+  const auto results = runAll(o, configs, scenarios);
+
+  const fs::path out(o.out);
+  fs::create_directories(out);
+  {
+    std::ofstream w(out / "world.csv");
+    w << "id,x,y,z\n";
+    for (const auto& l : sc.world) w << l.id << "," << l.p_n.x() << "," << l.p_n.y() << "," << l.p_n.z() << "\n";
+  }
+  std::vector<sim::ConsistencySummary> sums;
+  for (size_t c = 0; c < configs.size(); ++c) {
+    sums.push_back(sim::summarize(configs[c].first, results[c]));
+    writeConfigFiles(out / configs[c].first, sums.back(), results[c], sc, o.all_runs);
+  }
+  std::ofstream(out / "summary.json") << summaryJson(o, traj_name, sc, offsets, duration, configs, sums).dump(2)
+                                      << "\n";
+  const std::string md = summaryMarkdown(o, traj_name, sc, duration, sums);
+  std::ofstream(out / "summary.md") << md;
+  std::cout << "\n" << md << "\nwritten to " << out << "\n";
   return 0;
 }

@@ -30,6 +30,66 @@ NavState drawInitialEstimate(const NavState& truth, const InitialUncertainty& u,
   return est;
 }
 
+namespace {
+
+/// The filter's start: drawn from its prior around the truth (the truth itself when the run starts
+/// there); with a recorded IMU, its true biases minus an error drawn from the prior.
+NavState drawnStart(const Scenario& sc, const EkfSlamConfig& config, const NavState& truth0, std::mt19937_64& rng) {
+  NavState init = drawInitialEstimate(truth0, config.initial, rng);
+  if (sc.start_at_truth) init = truth0;
+  if (sc.recorded_imu) {
+    // A real IMU has the biases it has: start from the true ones (when the ground truth knows
+    // them) minus an error drawn from the filter's prior, as the simulated runs do.
+    const Vec3 b_a0 = sc.recorded_imu->true_accel_bias.front();
+    const Vec3 b_g0 = sc.recorded_imu->true_gyro_bias.front();
+    const Vec3 e_a = gaussian3(rng, Vec3::Constant(config.initial.accel_bias_mps2));
+    const Vec3 e_g = gaussian3(rng, Vec3::Constant(config.initial.gyro_bias_radps));
+    if (b_a0.allFinite()) init.b_a = b_a0 - e_a;
+    if (b_g0.allFinite()) init.b_g = b_g0 - e_g;
+  }
+  return init;
+}
+
+/// The sensor-centric state's own errors: the body in the strapdown frame {s} and {s} in {n},
+/// against the true {s} (p_n_s_true, q_n_s_true).
+void strapdownFrameErrors(const FilterState& s, const TrajectorySample& tr, const Vec3& p_n_s_true,
+                          const Quat& q_n_s_true, FrameMetrics* m) {
+  m->has_s = true;
+  const Eigen::MatrixXd Ps = s.motionCovariance();
+  const Vec3 p_s_b_true = q_n_s_true.conjugate() * (tr.p_n_b - p_n_s_true);
+  const Quat q_s_b_true = q_n_s_true.conjugate() * tr.q_n_b;
+  m->e_p_sb = p_s_b_true - s.x.p_s_b;
+  m->e_q_sb = eval::orientationError(q_s_b_true, s.x.q_s_b);
+  m->e_p_ns = p_n_s_true - s.x.p_n_s;
+  m->e_q_ns = eval::orientationError(q_n_s_true, s.x.q_n_s);
+  m->s_p_sb = sigmas(Ps, idx::kP);
+  m->s_q_sb = sigmas(Ps, idx::kPsi);
+  m->s_p_ns = sigmas(Ps, idx::kPns);
+  m->s_q_ns = sigmas(Ps, idx::kPsiNs);
+}
+
+/// The run's whole-trajectory figures from its per-frame positions and orientation errors.
+void trajectoryMetrics(const std::vector<Vec3>& p_true, const std::vector<Vec3>& p_est,
+                       const std::vector<double>& q_err_deg, RunResult* out) {
+  std::vector<Vec3> e;
+  for (size_t i = 0; i < p_true.size(); ++i) e.push_back(p_true[i] - p_est[i]);
+  out->ate_position_m = eval::rms(e);
+  const eval::YawTranslation T = eval::alignPosYaw(p_est, p_true);
+  std::vector<Vec3> e_aligned;
+  double filter_s = 0.0;
+  for (size_t i = 0; i < p_true.size(); ++i) e_aligned.push_back(p_true[i] - T.apply(p_est[i]));
+  for (const auto& f : out->frames) filter_s += f.update_ms * 1e-3;
+  out->ate_posyaw_m = eval::rms(e_aligned);
+  if (out->frames.size() > 1 && filter_s > 0.0) {
+    out->real_time_factor = (out->frames.back().t - out->frames.front().t) / filter_s;
+  }
+  out->ate_orientation_deg = eval::rms(q_err_deg);
+  out->final_position_error_m = e.empty() ? 0.0 : e.back().norm();
+  out->distance_m = eval::pathLength(p_true);
+}
+
+}  // namespace
+
 RunResult runMonteCarloRun(const Scenario& scenario_in, const EkfSlamConfig& config, std::uint64_t seed) {
   Scenario sc = scenario_in;
   // The IMU's turn-on biases are drawn from the filter's prior, unless the run starts at the true
@@ -45,18 +105,7 @@ RunResult runMonteCarloRun(const Scenario& scenario_in, const EkfSlamConfig& con
   std::mt19937_64 rng(seed);
   const double t0 = std::max(0.0, sc.trajectory->startTime());
   const NavState truth0 = trueNavState(*sc.trajectory, t0);
-  NavState init = drawInitialEstimate(truth0, config.initial, rng);
-  if (sc.start_at_truth) init = truth0;
-  if (sc.recorded_imu) {
-    // A real IMU has the biases it has: start from the true ones (when the ground truth knows
-    // them) minus an error drawn from the filter's prior, as the simulated runs do.
-    const Vec3 b_a0 = sc.recorded_imu->true_accel_bias.front();
-    const Vec3 b_g0 = sc.recorded_imu->true_gyro_bias.front();
-    const Vec3 e_a = gaussian3(rng, Vec3::Constant(config.initial.accel_bias_mps2));
-    const Vec3 e_g = gaussian3(rng, Vec3::Constant(config.initial.gyro_bias_radps));
-    if (b_a0.allFinite()) init.b_a = b_a0 - e_a;
-    if (b_g0.allFinite()) init.b_g = b_g0 - e_g;
-  }
+  const NavState init = drawnStart(sc, config, truth0, rng);
 
   RunResult out;
   // True pose of the strapdown frame {s}: the true body pose at the start and at every
@@ -103,20 +152,7 @@ RunResult runMonteCarloRun(const Scenario& scenario_in, const EkfSlamConfig& con
       p_n_s_true = tr.p_n_b;
       q_n_s_true = tr.q_n_b;
     }
-    if (isSensorCentric(s.mechanization())) {
-      m.has_s = true;
-      const Eigen::MatrixXd Ps = s.motionCovariance();
-      const Vec3 p_s_b_true = q_n_s_true.conjugate() * (tr.p_n_b - p_n_s_true);
-      const Quat q_s_b_true = q_n_s_true.conjugate() * tr.q_n_b;
-      m.e_p_sb = p_s_b_true - s.x.p_s_b;
-      m.e_q_sb = eval::orientationError(q_s_b_true, s.x.q_s_b);
-      m.e_p_ns = p_n_s_true - s.x.p_n_s;
-      m.e_q_ns = eval::orientationError(q_n_s_true, s.x.q_n_s);
-      m.s_p_sb = sigmas(Ps, idx::kP);
-      m.s_q_sb = sigmas(Ps, idx::kPsi);
-      m.s_p_ns = sigmas(Ps, idx::kPns);
-      m.s_q_ns = sigmas(Ps, idx::kPsiNs);
-    }
+    if (isSensorCentric(s.mechanization())) strapdownFrameErrors(s, tr, p_n_s_true, q_n_s_true, &m);
     std::vector<Vec3> est, truth;
     for (const auto& l : f.landmarks()) {
       est.push_back(l.p_n_l);
@@ -140,21 +176,7 @@ RunResult runMonteCarloRun(const Scenario& scenario_in, const EkfSlamConfig& con
   };
   const SimRun run = runSimulation(sc, config, init, rng, cb, false);
   out.init_delay_s = run.initialized_t - t0;
-  std::vector<Vec3> e;
-  for (size_t i = 0; i < p_true.size(); ++i) e.push_back(p_true[i] - p_est[i]);
-  out.ate_position_m = eval::rms(e);
-  const eval::YawTranslation T = eval::alignPosYaw(p_est, p_true);
-  std::vector<Vec3> e_aligned;
-  double filter_s = 0.0;
-  for (size_t i = 0; i < p_true.size(); ++i) e_aligned.push_back(p_true[i] - T.apply(p_est[i]));
-  for (const auto& f : out.frames) filter_s += f.update_ms * 1e-3;
-  out.ate_posyaw_m = eval::rms(e_aligned);
-  if (out.frames.size() > 1 && filter_s > 0.0) {
-    out.real_time_factor = (out.frames.back().t - out.frames.front().t) / filter_s;
-  }
-  out.ate_orientation_deg = eval::rms(q_err_deg);
-  out.final_position_error_m = e.empty() ? 0.0 : e.back().norm();
-  out.distance_m = eval::pathLength(p_true);
+  trajectoryMetrics(p_true, p_est, q_err_deg, &out);
   return out;
 }
 
