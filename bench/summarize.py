@@ -10,8 +10,8 @@ numbers and the machine; prints the table that bench/README.md keeps.
 import json
 import math
 import os
+import argparse
 import platform
-import sys
 
 
 def fit_exponent(points):
@@ -30,7 +30,12 @@ def to_us(value, unit):
 
 
 def main():
-    bench_json, pipeline_json, out = sys.argv[1], sys.argv[2], sys.argv[3]
+    p = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    p.add_argument("bench_json", help="Google Benchmark's JSON output")
+    p.add_argument("pipeline_json", help="bench/pipeline.py's JSON output")
+    p.add_argument("out", help="the folder for summary.json and summary.md")
+    a = p.parse_args()
+    bench_json, pipeline_json, out = a.bench_json, a.pipeline_json, a.out
     with open(bench_json) as f:
         data = json.load(f)
     rows = []

@@ -5,6 +5,7 @@ must all be visible. Exits non-zero with the counts otherwise.
 
 usage: check_screenshot.py PNG [--min-pixels N]
 """
+import argparse
 import sys
 
 import cv2
@@ -17,18 +18,19 @@ def count(img, rgb, tol=40):
 
 
 def main():
-    if len(sys.argv) < 2:
-        print(__doc__)
-        return 2
-    img = cv2.imread(sys.argv[1])
+    p = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    p.add_argument("png", help="the screenshot")
+    p.add_argument("--min-pixels", type=int, default=50, help="pixels of each colour it must show")
+    a = p.parse_args()
+    img = cv2.imread(a.png)
     if img is None:
-        print("cannot read", sys.argv[1])
+        print("cannot read", a.png)
         return 1
-    min_px = int(sys.argv[sys.argv.index("--min-pixels") + 1]) if "--min-pixels" in sys.argv else 50
+    min_px = a.min_pixels
     counts = {"path (255,25,0)": count(img, (255, 25, 0)), "landmarks (0,255,255)": count(img, (0, 255, 255)),
               "tracks (0,255,0)": count(img, (0, 255, 0), tol=30)}
     ok = all(c >= min_px for c in counts.values())
-    print("screenshot %s %dx%d: %s -> %s" % (sys.argv[1], img.shape[1], img.shape[0],
+    print("screenshot %s %dx%d: %s -> %s" % (a.png, img.shape[1], img.shape[0],
                                              ", ".join("%s %d px" % kv for kv in counts.items()), "ok" if ok else "MISSING"))
     return 0 if ok else 1
 

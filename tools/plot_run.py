@@ -13,8 +13,9 @@ NEES with the 95% band of 6 dof).
 import csv
 import json
 import os
-import shutil
+import argparse
 import sys
+import shutil
 
 import matplotlib
 
@@ -94,11 +95,17 @@ def plot_health(out):
     return written
 
 
+ARGS = None
+
+
 def main():
-    if len(sys.argv) < 2:
-        print(__doc__)
-        return 2
-    out = sys.argv[1]
+    global ARGS
+    p = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    p.add_argument("out", help="a folder written by vi_ekf_slam_run_bag")
+    p.add_argument("--docs", help="also copy the plots into this folder")
+    p.add_argument("--prefix", default="run", help="file name prefix of the copies in --docs")
+    ARGS = p.parse_args()
+    out = ARGS.out
     written = plot_health(out) if os.path.exists(os.path.join(out, "health.json")) else []
     if not os.path.exists(os.path.join(out, "summary.json")):
         copy_docs(out, written)
@@ -154,10 +161,9 @@ def main():
 
 
 def copy_docs(out, names):
-    if "--docs" not in sys.argv:
+    if not ARGS.docs:
         return
-    docs = sys.argv[sys.argv.index("--docs") + 1]
-    prefix = sys.argv[sys.argv.index("--prefix") + 1]
+    docs, prefix = ARGS.docs, ARGS.prefix
     os.makedirs(docs, exist_ok=True)
     for name in names:
         shutil.copy(os.path.join(out, name + ".png"), os.path.join(docs, f"{prefix}_{name}.png"))

@@ -6,8 +6,8 @@ usage: plot_soak.py DIR [--docs DOCS_DIR]   (writes DIR/soak.png, copies it to D
 """
 import csv
 import os
+import argparse
 import shutil
-import sys
 
 import matplotlib
 
@@ -16,7 +16,11 @@ import matplotlib.pyplot as plt  # noqa: E402
 
 
 def main():
-    out = sys.argv[1]
+    p = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    p.add_argument("out", help="a folder written by vi_ekf_slam_soak")
+    p.add_argument("--docs", help="also copy the plot into this folder")
+    a = p.parse_args()
+    out = a.out
     fig, (ax_e, ax_m) = plt.subplots(2, 1, figsize=(10, 6), sharex=True)
     for name in ("world_centric", "sensor_centric", "sensor_centric_composition"):
         path = os.path.join(out, name + ".csv")
@@ -38,8 +42,8 @@ def main():
     fig.tight_layout()
     png = os.path.join(out, "soak.png")
     fig.savefig(png, dpi=90)
-    if "--docs" in sys.argv:
-        docs = sys.argv[sys.argv.index("--docs") + 1]
+    if a.docs:
+        docs = a.docs
         os.makedirs(docs, exist_ok=True)
         shutil.copy(png, os.path.join(docs, "soak.png"))
     print("plot written to", png)

@@ -14,8 +14,9 @@ usage: plot_study.py OUT [--docs DIR --prefix NAME]   (copies the README's plots
 import csv
 import json
 import os
-import shutil
+import argparse
 import sys
+import shutil
 
 import matplotlib
 
@@ -124,14 +125,12 @@ def plot_config(out, cfg, world):
 
 
 def main():
-    if len(sys.argv) < 2:
-        print(__doc__)
-        return 2
-    out = sys.argv[1]
-    docs = prefix = None
-    if "--docs" in sys.argv:
-        docs = sys.argv[sys.argv.index("--docs") + 1]
-        prefix = sys.argv[sys.argv.index("--prefix") + 1]
+    p = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    p.add_argument("out", help="a folder written by vi_ekf_slam_study")
+    p.add_argument("--docs", help="also copy the plots into this folder")
+    p.add_argument("--prefix", default="study", help="file name prefix of the copies in --docs")
+    a = p.parse_args()
+    out, docs, prefix = a.out, a.docs, a.prefix if a.docs else None
     with open(os.path.join(out, "summary.json")) as f:
         summary = json.load(f)
     configs = [k for k in summary if k != "config"]

@@ -5,7 +5,6 @@
 // alignment), and what needs no ground truth (health.json / health.md / <run>_trace.csv). The
 // second form (--recorded) evaluates recordings of live replays of the same bag with the same
 // metrics. vi_ekf_slam_run_bag --help lists the options; docs/evaluation.md explains them.
-#include <boost/program_options.hpp>
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
@@ -22,10 +21,11 @@
 #include "vi_ekf_slam/eval/tum_io.h"
 #include "vi_ekf_slam/ros/bag_io.h"
 #include "vi_ekf_slam/ros/bag_replay.h"
+#include "cli.h"
 
 using namespace vi_ekf_slam;
 namespace fs = std::filesystem;
-namespace po = boost::program_options;
+namespace po = cli::po;
 
 namespace {
 
@@ -64,20 +64,20 @@ struct Options {
   std::vector<std::string> params;    ///< name=value
 };
 
-/// Parses argv into *o; returns the exit code to end with (0 after --help), or -1 to go on.
-int parseArguments(int argc, char** argv, Options* o) {
-  po::options_description d(
-      "usage: vi_ekf_slam_run_bag --bag FILE [options]\n"
-      "       vi_ekf_slam_run_bag --bag FILE --recorded NAME=REC.bag [--recorded ...] [--out DIR]\n"
-      "Runs the node's processor over a bag offline (deterministic, as fast as the CPU allows) and evaluates it.\n"
-      "Options");
+/// Parses argv into *o (--help and usage errors exit, as every tool's).
+void parseArguments(int argc, char** argv, Options* o) {
+  const std::string usage =
+      "vi_ekf_slam_run_bag --bag FILE [--out DIR] [--config YAML] [--rig YAML] [--param NAME=VALUE ...] "
+      "[--mechanization NAME|all] [--reference FILE.tum ...]\n"
+      "       vi_ekf_slam_run_bag --bag FILE --recorded NAME=REC.bag [--recorded ...] [--out DIR]";
+  po::options_description d("options");
   std::string imu, image, info;
   bool no_plots = false;
-  d.add_options()("help,h", "this text")("bag", po::value(&o->bag), "the input bag (required)")(
+  d.add_options()("bag", po::value(&o->bag)->required(), "the input bag")(
       "out", po::value(&o->out), "output directory (default results/run_bag/<bag name>)")(
       "config", po::value(&o->config), "node parameters, YAML (default: the package's config/vi_ekf_slam.yaml)")(
       "rig", po::value(&o->rig), "a rig file (calibration values) on top of --config")(
-      "param", po::value(&o->params)->composing(), "name=value: one node parameter (repeatable)")(
+      "param", po::value(&o->params)->composing(), "NAME=VALUE: one node parameter (repeatable)")(
       "mechanization", po::value(&o->mechanization),
       "world_centric | sensor_centric | sensor_centric_composition | all")(
       "imu-topic", po::value(&imu), "sensor_msgs/Imu topic (default: the bag's one)")(
@@ -86,7 +86,7 @@ int parseArguments(int argc, char** argv, Options* o) {
       "no-plots", po::bool_switch(&no_plots), "skip the plots of plot_run.py")(
       "reference", po::value(&o->references)->composing(), "a TUM trajectory to compare with (repeatable)")(
       "reference-alignment", po::value(&o->reference_alignment)->composing(),
-      "sim3 | se3 | posyaw: one for all references or one per reference (default sim3)")(
+      "sim3 | se3 | posyaw: once for all references or once per reference (default sim3)")(
       "reference-frame", po::value(&o->reference_frame)->composing(),
       "body | camera: whose poses the reference holds (default body)")(
       "reference-clock", po::value(&o->reference_clock)->composing(),
@@ -94,28 +94,14 @@ int parseArguments(int argc, char** argv, Options* o) {
       "reference-from-s", po::value(&o->reference_from_s)->composing(),
       "compare only from this many seconds after the bag's start (default 0)")(
       "recorded", po::value(&o->recorded)->composing(), "NAME=REC.bag: a recording of a live replay (repeatable)");
-  po::variables_map vm;
-  try {
-    po::store(po::parse_command_line(argc, argv, d), vm);
-    po::notify(vm);
-  } catch (const po::error& e) {
-    std::cerr << "error: " << e.what() << "\n" << d << "\n";
-    return 2;
-  }
-  if (vm.count("help")) {
-    std::cout << d << "\n";
-    return 0;
-  }
-  if (o->bag.empty()) {
-    std::cerr << "error: --bag is missing\n" << d << "\n";
-    return 2;
-  }
+  const po::variables_map vm = cli::parse(
+      argc, argv, usage,
+      "Runs the node's processor over a bag offline (deterministic, as fast as the CPU allows) and evaluates it.", d);
   if (vm.count("imu-topic")) o->imu_topic = imu;
   if (vm.count("image-topic")) o->image_topic = image;
   if (vm.count("camera-info-topic")) o->camera_info_topic = info;
   o->plots = !no_plots;
   if (o->out.empty()) o->out = "results/run_bag/" + fs::path(o->bag).stem().string();
-  return -1;
 }
 
 /// The references with their options (one value for all or one per reference).
@@ -312,7 +298,7 @@ void plot(const std::string& out) {
 int main(int argc, char** argv) {
   ros::Time::init();  // no master: wall time for the (throttled) log messages only
   Options o;
-  if (const int code = parseArguments(argc, argv, &o); code >= 0) return code;
+  parseArguments(argc, argv, &o);
   // Exit 2: the command line does not fit (options, references, topics); 1: the run failed.
   std::vector<Reference> refs;
   glue::InputBagInfo info;
