@@ -100,6 +100,8 @@ rebuild-check: build
 
 test: build lint rebuild-check
 	$(CATKIN) tests
+	@# The package installed into a prefix runs (run_bag, replay.launch) without the source tree.
+	bash test/install/check_installed.sh $(WS)
 	@rm -rf $(WS)/build/test_results
 	@# Two tests at a time: the rostests wait for their stream's end (no wall-clock window) and
 	@# each starts its own master on a free port.

@@ -22,7 +22,7 @@ PKGS=(
   python3-diagnostic-msgs python3-rostopic python3-rosnode python3-rospy python3-rosservice
   # tools, plots, screenshots, lint
   python3-opencv python3-numpy python3-matplotlib python3-yaml
-  rviz xvfb x11-apps imagemagick catkin-lint clang-format clang-tidy pyflakes3
+  rviz xvfb x11-apps imagemagick catkin-lint clang-format clang-tidy pyflakes3 strace
 )
 
 missing=()
