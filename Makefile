@@ -155,11 +155,11 @@ bench: build $(BAG) $(if $(wildcard $(DATA_DIR)/dmvio_handheld/mav0),results/bag
 	python3 bench/summarize.py results/bench/google_benchmark.json results/bench/pipeline.json results/bench
 
 # The suite (docs/evaluation.md): the study with the same seeds over the built-in walk, every
-# trajectory in DATA_DIR/trajectories (120 s windows) and the walks of tools/make_walks.py; one
+# trajectory in DATA_DIR/trajectories (120 s windows) and the simulator's generated walks; one
 # table per case and configuration plus the worst case of each configuration; SEED=1,2,3: each seed
 # in SUITE_OUT/seed_N and the worst over all seeds in SUITE_OUT/suite_seeds.md.
 #   make suite [SUITE_RUNS=8] [SEED=1] [SUITE_CONFIGS=a,b] [SUITE_OUT=results/suite] [STUDY_ARGS=...]
-#              [SUITE_WALKS=kind,..|all]  (tools/make_walks.py's kinds; all: with its probe walks)
+#              [SUITE_WALKS=kind,..|all]  (vi_ekf_slam_make_walks kinds; all: with the probe walks)
 SUITE_RUNS    ?= 8
 SUITE_OUT     ?= results/suite
 SUITE_CONFIGS ?=
@@ -170,7 +170,7 @@ suite: build
 	  $(if $(SUITE_WALKS),--walks $(SUITE_WALKS)) $(if $(STUDY_ARGS),-- $(STUDY_ARGS))
 
 # Starting mid-walk (docs/initialization.md): on the built-in walk, every trajectory in
-# DATA_DIR/trajectories and the walks of tools/make_walks.py, the study from 5 random start times
+# DATA_DIR/trajectories and the simulator's generated walks, the study from 5 random start times
 # (20 runs) with the node's default configuration, started as the node starts (at rest or moving),
 # from the truth and from the prior; one table.
 #   make initsuite [SEED=1] [INIT_OUT=results/init_suite]

@@ -20,7 +20,7 @@ import os
 import subprocess
 import sys
 
-from study_cli import add_study_options
+from study_cli import add_study_options, resolve_tools
 from suite import fmt, trajectory_files, walk_files, write_walks
 
 # The built-in walk, every TUM file in DATA_DIR/trajectories (a file added there joins; short names
@@ -50,7 +50,7 @@ def main():
     ap.add_argument("--window", type=float, default=20.0, help="seconds from each start")
     ap.add_argument("--seed", type=int, default=1)
     ap.add_argument("--threads", type=int, default=os.cpu_count() or 1)
-    a = ap.parse_args()
+    a = resolve_tools(ap.parse_args())
 
     rows = []
     trajectories = [("builtin", "builtin")]
@@ -60,8 +60,8 @@ def main():
     for path in files:
         stem = os.path.splitext(os.path.basename(path))[0]
         trajectories.append((SHORT_NAMES.get(stem, stem), path))
-    # The suite's generated walks (tools/make_walks.py): a slow start, a crawl, stops, stairs, a fast walk.
-    trajectories += walk_files(write_walks(a.out))
+    # The suite's generated walks (sim/generated_walks.h): a slow start, a crawl, stops, stairs, a fast walk, a stairwell.
+    trajectories += walk_files(write_walks(a.make_walks, a.out))
     for name, traj in trajectories:
         dyn = study(a, traj, "dynamic", os.path.join(a.out, name, "dynamic"))
         ref = study(a, traj, "truth", os.path.join(a.out, name, "truth"))

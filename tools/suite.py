@@ -3,7 +3,7 @@
 table per trajectory and configuration, with a worst-case row per configuration.
 
 Cases: the built-in hallway walk; the TUM corridor, UDel ARL and EuRoC V1_01 (the non-pedestrian
-check) from DATA_DIR/trajectories, each in 120 s windows; and the walks of tools/make_walks.py
+check) from DATA_DIR/trajectories, each in 120 s windows; and the simulator's generated walks
 (a slow start, a crawl, stands, stairs, a fast walk, a stairwell; --walks chooses others, or all of
 its kinds). Any other *.txt in DATA_DIR/trajectories joins the suite with one window from its
 start, so the command runs unchanged on trajectories added there.
@@ -24,7 +24,7 @@ import subprocess
 import sys
 import time
 
-from study_cli import add_study_options
+from study_cli import add_study_options, resolve_tools
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 
@@ -53,15 +53,15 @@ def trajectory_files(data_dir):
     return sorted(glob.glob(os.path.join(data_dir, "trajectories", "*.txt")))
 
 
-def write_walks(out_dir, kinds=""):
-    """The walks of tools/make_walks.py (its default kinds, or KINDS) written into OUT_DIR/walks,
-    and no others; returns that folder."""
+def write_walks(tool, out_dir, kinds=""):
+    """The simulator's generated walks (TOOL: vi_ekf_slam_make_walks; the suite's kinds, or KINDS)
+    written into OUT_DIR/walks, and no others; returns that folder."""
     walks = os.path.join(out_dir, "walks")
     for old in glob.glob(os.path.join(walks, "*.txt")):
         os.remove(old)  # a walk of an earlier call with other kinds is not one of this suite's
-    cmd = [sys.executable, os.path.join(HERE, "make_walks.py"), walks] + (["--kinds", kinds] if kinds else [])
+    cmd = [tool, "--out", walks, "--kinds", kinds or "suite"]
     if subprocess.run(cmd, stdout=subprocess.DEVNULL).returncode != 0:
-        sys.exit("suite: tools/make_walks.py could not write the walks (above)")
+        sys.exit("suite: %s could not write the walks (above)" % tool)
     return walks
 
 
@@ -206,16 +206,16 @@ def main():
     add_study_options(ap, out="results/suite", runs=8)
     ap.add_argument("--seed", default="1", help="a seed, or several (1,2,3): each in OUT/seed_N, worst over all")
     ap.add_argument("--configs", default="", help="configurations (default: the study's suite set)")
-    ap.add_argument("--walks", default="", help="tools/make_walks.py kinds, comma-separated, or all (default: its own)")
+    ap.add_argument("--walks", default="", help="generated walk kinds (vi_ekf_slam_make_walks), comma-separated, or all (default: the suite's)")
     ap.add_argument("--threads", type=int, default=os.cpu_count() or 1)
     ap.add_argument("extra", nargs="*", help="more options for every study call (after --)")
-    a = ap.parse_args()
+    a = resolve_tools(ap.parse_args())
     try:
         seeds = [int(x) for x in a.seed.split(",")]
     except ValueError:
         sys.exit("suite: --seed takes integers, comma-separated")
 
-    walks = write_walks(a.out, a.walks)
+    walks = write_walks(a.make_walks, a.out, a.walks)
     configs = a.configs.split(",") if a.configs else configs_in(a.study, "suite")
     t_start = time.time()
     if len(seeds) == 1:

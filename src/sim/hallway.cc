@@ -112,30 +112,20 @@ std::shared_ptr<BsplineTrajectory> pedestrianWalk(const HallwayParams& p) {
   const Centerline c = centerline(p);
   std::vector<eval::StampedPose> poses;
   const double dt = 0.01;
-  double s = 0.0, phase = 0.0;
+  GaitParams g = p.gait;
+  g.cruise_speed_mps = p.speed_mps;
+  Gait gait(g);
+  double s = 0.0;
   for (double t = -0.1; t <= p.duration_s + 0.1 + 1e-9; t += dt) {
     const double v = t > p.standing_s ? speedAt(p, t) : 0.0;
     if (t > p.standing_s) {
       s += v * dt;
-      phase += 2.0 * M_PI * p.step_frequency_hz * dt;
+      gait.advance(v, dt);
     }
     Vec3 pos;
     double heading;
     centerlineAt(c, s, &pos, &heading);
-    // Gait, scaled with the speed: bounce at the step frequency, sway at the stride frequency.
-    const double a = v / p.speed_mps;
-    const Vec3 right(-std::sin(heading), std::cos(heading), 0.0);
-    pos += a * p.sway_m * std::sin(0.5 * phase) * right;
-    pos.z() += -a * p.bounce_m * std::cos(phase);
-    const double yaw = heading + a * p.yaw_sway_rad * std::cos(0.5 * phase);
-    const double roll = a * p.roll_sway_rad * std::sin(0.5 * phase);
-    const double pitch = a * p.pitch_bob_rad * std::sin(phase);
-    eval::StampedPose sp;
-    sp.t = t;
-    sp.p = pos;
-    sp.q = Quat(Eigen::AngleAxisd(yaw, Vec3::UnitZ()) * Eigen::AngleAxisd(pitch, Vec3::UnitY()) *
-                Eigen::AngleAxisd(roll, Vec3::UnitX()));
-    poses.push_back(sp);
+    poses.push_back(gait.pose(t, pos, heading, v));
   }
   return std::make_shared<BsplineTrajectory>(poses, 0.02);
 }

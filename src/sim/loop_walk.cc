@@ -50,20 +50,18 @@ void onLoop(const LoopParams& l, double s, Vec3* p, double* yaw) {
 std::shared_ptr<BsplineTrajectory> loopWalk(const HallwayParams& g, const LoopParams& l) {
   std::vector<eval::StampedPose> poses;
   const double dt = 0.05, ramp = 1.0;
+  GaitParams gp = g.gait;
+  gp.cruise_speed_mps = g.speed_mps;
+  Gait gait(gp);
   for (double t = 0.0; t <= l.duration_s + 4 * dt; t += dt) {
     const double tau = std::max(0.0, t - g.standing_s);
     const double s = tau < ramp ? g.speed_mps * tau * tau / (2 * ramp) : g.speed_mps * (tau - 0.5 * ramp);
     Vec3 p;
     double yaw;
     onLoop(l, s, &p, &yaw);
-    const double walking = tau > 0.0 ? std::min(1.0, tau / ramp) : 0.0;
-    const double step = 2 * M_PI * g.step_frequency_hz * tau, stride = 0.5 * step;
-    const Vec3 right(-std::sin(yaw), std::cos(yaw), 0.0);
-    p += walking * (g.sway_m * std::sin(stride) * right + Vec3(0, 0, g.bounce_m * std::sin(step)));
-    const Quat q = Quat(Eigen::AngleAxisd(yaw + walking * g.yaw_sway_rad * std::sin(stride), Vec3::UnitZ())) *
-                   Quat(Eigen::AngleAxisd(walking * g.pitch_bob_rad * std::sin(step), Vec3::UnitY())) *
-                   Quat(Eigen::AngleAxisd(walking * g.roll_sway_rad * std::sin(stride), Vec3::UnitX()));
-    poses.push_back({t, p, q.normalized(), std::nullopt});
+    const double v = g.speed_mps * std::min(1.0, tau / ramp);
+    if (tau > 0.0) gait.advance(v, dt);
+    poses.push_back(gait.pose(t, p, yaw, v));
   }
   return std::make_shared<BsplineTrajectory>(poses, dt);
 }

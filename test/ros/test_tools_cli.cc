@@ -164,7 +164,8 @@ echo '{"config": {"pose_nees_band": [3.84, 8.63]}, "default": {"ate_position_m":
 )";
   ASSERT_EQ(run("chmod +x " + dir + "/study.sh").code, 0);
   const std::string suite = "python3 " + std::string(VI_EKF_SLAM_SOURCE_DIR) + "/tools/suite.py --study " + dir +
-                            "/study.sh --data " + dir + "/data --out " + dir + "/out --runs 2 --configs default";
+                            "/study.sh --make-walks " + VI_TOOL_MAKE_WALKS + " --data " + dir + "/data --out " + dir +
+                            "/out --runs 2 --configs default";
   const Outcome o = run(suite);
   EXPECT_EQ(o.code, 1) << o.output;
   EXPECT_NE(o.output.find("| broken@0 | default | - | - | failed (error: " + dir +
@@ -177,7 +178,7 @@ echo '{"config": {"pose_nees_band": [3.84, 8.63]}, "default": {"ate_position_m":
   EXPECT_NE(o.output.find("| default | 6.10 | 0 | 0.97 | - | 1 |"), std::string::npos) << o.output;
   EXPECT_TRUE(std::ifstream(dir + "/out/suite.md").good());
 
-  // --walks: the named walks of tools/make_walks.py and no others, also in a folder that held the
+  // --walks: the named generated walks and no others, also in a folder that held the
   // default ones; an unknown kind ends the suite before any case runs.
   const Outcome w = run(suite + " --walks slow_walk,stairs");
   EXPECT_NE(w.output.find("| walk_slow_walk | default | 0.200 |"), std::string::npos) << w.output;
@@ -185,7 +186,7 @@ echo '{"config": {"pose_nees_band": [3.84, 8.63]}, "default": {"ate_position_m":
   EXPECT_EQ(w.output.find("walk_crawl"), std::string::npos) << w.output;
   const Outcome unknown = run(suite + " --walks nope");
   EXPECT_NE(unknown.code, 0);
-  EXPECT_NE(unknown.output.find("unknown kind(s) nope"), std::string::npos) << unknown.output;
+  EXPECT_NE(unknown.output.find("unknown walk 'nope'"), std::string::npos) << unknown.output;
   EXPECT_EQ(unknown.output.find("| builtin |"), std::string::npos) << unknown.output;
 }
 

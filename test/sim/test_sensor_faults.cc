@@ -100,12 +100,12 @@ TEST(SensorFaults, TheGateWidensDuringACrawlWhoseImuLooksAtRest) {
   h.speed_mps = 0.3;
   h.duration_s = 12.0;
   const double quarter = 0.23;
-  h.step_frequency_hz *= 0.48;
-  h.bounce_m *= quarter;
-  h.sway_m *= quarter;
-  h.yaw_sway_rad *= quarter;
-  h.roll_sway_rad *= quarter;
-  h.pitch_bob_rad *= quarter;
+  h.gait.step_frequency_hz *= 0.48;
+  h.gait.bounce_m *= quarter;
+  h.gait.sway_m *= quarter;
+  h.gait.yaw_sway_rad *= quarter;
+  h.gait.roll_sway_rad *= quarter;
+  h.gait.pitch_bob_rad *= quarter;
   sim::Scenario sc = sim::hallwayScenario(h, 1.0, 1);
   EkfSlamConfig c;  // the node's defaults
   c.imu_noise = sc.imu.noise;

@@ -10,6 +10,7 @@
 #include <vector>
 
 #include "vi_ekf_slam/sim/bspline_trajectory.h"
+#include "vi_ekf_slam/sim/gait.h"
 #include "vi_ekf_slam/sim/landmark_world.h"
 
 namespace vi_ekf_slam::sim {
@@ -37,13 +38,9 @@ struct HallwayParams {
   double main_width_m = 2.4;
   double side_width_m = 1.4;  ///< the narrow side corridor
   double height_m = 2.6;
-  double body_height_m = 1.3;      ///< IMU above the floor
-  double step_frequency_hz = 1.9;  ///< steps per second (two per stride)
-  double bounce_m = 0.025;         ///< vertical amplitude at the step frequency
-  double sway_m = 0.03;            ///< lateral amplitude at the stride frequency
-  double yaw_sway_rad = 0.035;     ///< torso yaw oscillation (~2 deg)
-  double roll_sway_rad = 0.026;    ///< torso roll oscillation (~1.5 deg)
-  double pitch_bob_rad = 0.017;    ///< torso pitch at the step frequency (~1 deg)
+  double body_height_m = 1.3;  ///< IMU above the floor
+  /// The walker's gait (a constant cadence; its cruise speed is speed_mps).
+  GaitParams gait;
 };
 
 /// The centreline geometry: where the side corridor branches off (x of its axis, {n}).
