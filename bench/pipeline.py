@@ -44,7 +44,7 @@ def offline(bag, out, summary_file, extra=()):
                     "--mechanization", MECH, "--out", out, "--no-plots"] + list(extra),
                    check=True, stdout=subprocess.DEVNULL)
     with open(os.path.join(out, summary_file)) as f:
-        return json.load(f)[MECH]
+        return json.load(f)["runs"][MECH]
 
 
 def main():

@@ -7,11 +7,17 @@ Writes OUT_DIR/summary.json: every benchmark with its family, N, median time [us
 fitted growth exponent per family (least squares of log(time) on log(N)), plus the pipeline
 numbers and the machine; prints the table that bench/README.md keeps.
 """
+import argparse
 import json
 import math
 import os
-import argparse
 import platform
+import sys
+
+# The report writer is tools/report.py (installed beside this script).
+HERE = os.path.dirname(os.path.abspath(__file__))
+sys.path[:0] = [HERE, os.path.join(HERE, "..", "tools")]
+import report  # noqa: E402
 
 
 def fit_exponent(points):
@@ -58,16 +64,15 @@ def main():
         with open(pipeline_json) as f:
             pipeline = json.load(f)
     ctx = data.get("context", {})
-    summary = {
-        "machine": {"host": platform.node(), "cpus": ctx.get("num_cpus"), "mhz": ctx.get("mhz_per_cpu"),
-                    "cpu_model": cpu_model(), "date": ctx.get("date")},
-        "benchmarks": rows,
-        "exponents": exponents,
-        "pipeline": pipeline,
-    }
-    os.makedirs(out, exist_ok=True)
-    with open(os.path.join(out, "summary.json"), "w") as f:
-        json.dump(summary, f, indent=1)
+    machine = {"host": platform.node(), "cpus": ctx.get("num_cpus"), "mhz": ctx.get("mhz_per_cpu"),
+               "cpu_model": cpu_model(), "date": ctx.get("date")}
+    summary = report.report(
+        "bench", "Benchmarks (one core, median CPU time)", machine, {r["name"]: r for r in rows},
+        {"exponents": {f: {"exponent": e} for f, e in exponents.items()}, "pipeline": {"pipeline": pipeline}})
+    report.write_report(out, "summary", summary,
+                        columns=[("family", "family", 0), ("N", "N", 0), ("median_us", "median [us]", 2)],
+                        headings={"exponents": "Growth exponent per family (log time on log N)",
+                                  "pipeline": "The pipeline (bench/pipeline.py)"})
 
     sizes = sorted({r["N"] for r in rows if r["N"] is not None})
     print("| operation | " + " | ".join("N=%d" % n for n in sizes) + " | exponent |")
@@ -84,8 +89,7 @@ def main():
             print("%s: %.2f ms per frame%s" % (r["family"], r["median_us"] / 1000.0, extra))
     for k, v in pipeline.items():
         print("%s: %s" % (k, v))
-    print("\nwritten to %s/summary.json (machine: %s, %s CPUs)" % (out, summary["machine"]["cpu_model"],
-                                                                  summary["machine"]["cpus"]))
+    print("\nwritten to %s/summary.json (machine: %s, %s CPUs)" % (out, machine["cpu_model"], machine["cpus"]))
 
 
 def fmt(us):

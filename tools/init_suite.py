@@ -15,13 +15,13 @@ registration does not enter.
                 [--window 20] [--seed 1] [--threads N]
 """
 import argparse
-import json
 import os
 import subprocess
 import sys
 
 from study_cli import add_study_options, resolve_tools
-from suite import fmt, trajectory_files, walk_files, write_walks
+import report
+from suite import trajectory_files, walk_files, write_walks
 
 # The built-in walk, every TUM file in DATA_DIR/trajectories (a file added there joins; short names
 # for the known ones) and the suite's generated walks.
@@ -39,8 +39,7 @@ def study(a, traj, init, out):
     if proc.returncode != 0:
         sys.stderr.write(proc.stdout + proc.stderr)
         sys.exit("init_suite: the study failed: " + " ".join(cmd))
-    with open(os.path.join(out, "summary.json")) as f:
-        return json.load(f)
+    return report.load(os.path.join(out, "summary.json"))
 
 
 def main():
@@ -66,12 +65,13 @@ def main():
         dyn = study(a, traj, "dynamic", os.path.join(a.out, name, "dynamic"))
         ref = study(a, traj, "truth", os.path.join(a.out, name, "truth"))
         pri = study(a, traj, "prior", os.path.join(a.out, name, "prior"))
-        d, r, p = dyn["default"], ref["default"], pri["default"]
+        d, r, p = dyn["runs"]["default"], ref["runs"]["default"], pri["runs"]["default"]
         delays = [x for x in d["init_delay_s"] if x is not None]
         fast = sum(1 for x in delays if x <= INIT_WITHIN_S)
         band = dyn["config"]["pose_nees_band"]
         rows.append({
-            "trajectory": name, "starts_s": dyn["config"]["start_offsets_s"], "runs": d["runs_started"],
+            "trajectory": name, "starts_s": ", ".join("%g" % s for s in dyn["config"]["start_offsets_s"]),
+            "runs": d["runs_started"],
             "initialized": len(delays), "initialized_within_1_5_s": fast,
             "init_delay_max_s": max(delays) if delays else None,
             "nees_pose_first_10s": d["nees_pose_first_10s"], "nees_band": band,
@@ -80,31 +80,29 @@ def main():
             "prior_ate_posyaw_m": p["ate_posyaw_m"],
         })
         print("  %s done" % name, flush=True)
-    os.makedirs(a.out, exist_ok=True)
-    with open(os.path.join(a.out, "init_suite.json"), "w") as f:
-        json.dump({"runs": a.runs, "starts": a.starts, "window_s": a.window, "seed": a.seed, "rows": rows}, f, indent=1)
-    lines = ["# Starting mid-walk: %d runs from %d random starts per trajectory, %g s each, seed %d" %
-             (a.runs, a.starts, a.window, a.seed), "",
-             "| trajectory | starts [s] | initialized within 1.5 s | max delay [s] | NEES pose, first 10 s (band) "
-             "| ATE posyaw: dynamic / truth start [m] | ratio | ATE: dynamic / truth start [m] "
-             "| ATE posyaw, prior start [m] |",
-             "|---|---|---|---|---|---|---|---|---|"]
-    for r in rows:
-        nees_ok = r["nees_pose_first_10s"] is not None and r["nees_band"][0] <= r["nees_pose_first_10s"] <= r["nees_band"][1]
-        ratio = r["ate_posyaw_m"] / r["truth_ate_posyaw_m"] if r["truth_ate_posyaw_m"] else None
-        lines.append("| %s | %s | %d/%d | %s | %s%s [%.2f, %.2f] | %s / %s | %s | %s / %s | %s |" % (
-            r["trajectory"], ", ".join("%g" % s for s in r["starts_s"]), r["initialized_within_1_5_s"], r["runs"],
-            fmt(r["init_delay_max_s"], 2), fmt(r["nees_pose_first_10s"], 2), "" if nees_ok else " (!)",
-            r["nees_band"][0], r["nees_band"][1], fmt(r["ate_posyaw_m"]), fmt(r["truth_ate_posyaw_m"]),
-            fmt(ratio, 2), fmt(r["ate_m"]), fmt(r["truth_ate_m"]), fmt(r["prior_ate_posyaw_m"])))
+    for row in rows:
+        lo, hi = row["nees_band"]
+        row["nees_inside_band"] = row["nees_pose_first_10s"] is not None and lo <= row["nees_pose_first_10s"] <= hi
+        row["ate_posyaw_over_truth_start"] = (row["ate_posyaw_m"] / row["truth_ate_posyaw_m"]
+                                              if row["truth_ate_posyaw_m"] else None)
     within, runs = sum(r["initialized_within_1_5_s"] for r in rows), sum(r["runs"] for r in rows)
+    notes = []
     if runs:
-        lines += ["", "All trajectories: %d/%d runs initialized within %g s (%.1f%%; at least %g%% asked)%s" % (
+        notes.append("All trajectories: %d/%d runs initialized within %g s (%.1f%%; at least %g%% asked)%s" % (
             within, runs, INIT_WITHIN_S, 100.0 * within / runs, 100.0 * MIN_FRACTION_WITHIN,
-            "" if within >= MIN_FRACTION_WITHIN * runs else " (!)")]
-    text = "\n".join(lines) + "\n"
-    with open(os.path.join(a.out, "init_suite.md"), "w") as f:
-        f.write(text)
+            "" if within >= MIN_FRACTION_WITHIN * runs else " (!)"))
+    r = report.report("init_suite", "Starting mid-walk: %d runs from %d random starts per trajectory, %g s each, "
+                      "seed %d" % (a.runs, a.starts, a.window, a.seed),
+                      {"runs": a.runs, "starts": a.starts, "window_s": a.window, "seed": a.seed},
+                      {row["trajectory"]: row for row in rows})
+    columns = [("starts_s", "starts [s]", 0), ("initialized_within_1_5_s", "initialized within 1.5 s", 0),
+               ("runs", "runs", 0), ("init_delay_max_s", "max delay [s]", 2),
+               ("nees_pose_first_10s", "NEES pose, first 10 s", 2), ("nees_inside_band", "inside band", 0),
+               ("ate_posyaw_m", "ATE posyaw, dynamic start [m]", 3),
+               ("truth_ate_posyaw_m", "ATE posyaw, truth start [m]", 3),
+               ("ate_posyaw_over_truth_start", "ratio", 2), ("ate_m", "ATE, dynamic start [m]", 3),
+               ("truth_ate_m", "ATE, truth start [m]", 3), ("prior_ate_posyaw_m", "ATE posyaw, prior start [m]", 3)]
+    text = report.write_report(a.out, "init_suite", r, columns=columns, notes=notes)
     print(text)
 
 

@@ -33,8 +33,8 @@ def load(path):
 def plot_health(out):
     """What a run says about itself: no ground truth needed."""
     with open(os.path.join(out, "health.json")) as f:
-        health = json.load(f)
-    runs = [k for k in health if k != "config" and os.path.exists(os.path.join(out, k + "_trace.csv"))]
+        health = json.load(f)["runs"]
+    runs = [k for k in health if os.path.exists(os.path.join(out, k + "_trace.csv"))]
     if not runs:
         return []
     fig, axes = plt.subplots(4, 1, figsize=(9, 9), sharex=True)
@@ -112,8 +112,7 @@ def main():
         print("plots written to", out, "(no ground truth: health and reference plots only)")
         return 0
     with open(os.path.join(out, "summary.json")) as f:
-        summary = json.load(f)
-    runs = [k for k in summary if k != "config"]
+        runs = list(json.load(f)["runs"])
     data = {r: load(os.path.join(out, r + "_timeseries.csv")) for r in runs}
     fig, ax = plt.subplots(figsize=(7, 6))
     first = data[runs[0]]

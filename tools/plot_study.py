@@ -133,7 +133,7 @@ def main():
     out, docs, prefix = a.out, a.docs, a.prefix if a.docs else None
     with open(os.path.join(out, "summary.json")) as f:
         summary = json.load(f)
-    configs = [k for k in summary if k != "config"]
+    configs = list(summary["runs"])
     world = read_csv(os.path.join(out, "world.csv"))
     for cfg in configs:
         plot_config(out, cfg, world)

@@ -10,9 +10,10 @@ usage: results_page.py [--results results] [--out docs/results.md] [--readme REA
 """
 import argparse
 import datetime
-import json
 import os
 import sys
+
+import report
 
 BEGIN = "<!-- results: the first section of docs/results.md (make results); do not edit here -->"
 END = "<!-- /results -->"
@@ -21,8 +22,7 @@ MECHANIZATIONS = ["world_centric", "sensor_centric", "sensor_centric_composition
 
 
 def load(path):
-    with open(path) as f:
-        return json.load(f)
+    return report.load(path)
 
 
 def stamp(path):
@@ -35,7 +35,7 @@ def f(v, digits=3):
 
 def demo_section(results):
     path = os.path.join(results, "demo", "summary.json")
-    s = load(path)
+    s = load(path)["runs"]
     rows = [(m, s[m]) for m in MECHANIZATIONS if m in s]
     glance = ["| run | ATE [m] | final error [m] | NEES pose (dim 6) | ms per image (p95) |",
               "|---|---|---|---|---|"]
@@ -63,10 +63,8 @@ def realdata_section(results):
     for sub in ["defaults", "rig"]:
         path = os.path.join(results, "realdata", sub, "health.json")
         if os.path.exists(path):
-            h = load(path)
-            for name, r in h.items():
-                if name != "config":
-                    runs.append((sub, name, r, path))
+            for name, r in load(path)["runs"].items():
+                runs.append((sub, name, r, path))
     if not runs:
         raise FileNotFoundError("results/realdata/*/health.json (make realdata)")
     text = ["## The real hand-held recording (`make realdata`)", "",
@@ -99,16 +97,18 @@ def realdata_section(results):
 
 def suite_section(results):
     path = os.path.join(results, "suite", "suite.json")
-    s = load(path)
-    band = s["pose_nees_band"]
+    r = load(path)
+    s = {"rows": list(r["runs"].values()), "worst": r["tables"]["worst"]}
+    band = r["config"]["pose_nees_band"]
     configs = list(s["worst"].keys())
     text = ["## The suite (`make suite`)", "",
             "The study on every walk we have, %d runs per case, seed %d; pose NEES band [%.2f, %.2f]; "
-            "`results/suite/suite.json`, %s." % (s["runs"], s["seed"], band[0], band[1], stamp(path)), "",
+            "`results/suite/suite.json`, %s." % (r["config"]["runs"], r["config"]["seed"], band[0], band[1],
+                                                stamp(path)), "",
             "| case | configuration | ATE [m] | ATE posyaw [m] | NEES pose | consistent | ATE / best of the paper's |",
             "|---|---|---|---|---|---|---|"]
     for r in s["rows"]:
-        if "failed" in r:
+        if r.get("failed"):
             text.append("| %s | %s | failed: %s | | | | |" % (r["case"], r["config"], r["failed"]))
             continue
         text.append("| %s | %s | %s | %s | %s | %s | %s |" % (
@@ -131,18 +131,19 @@ def suite_section(results):
 
 def bench_section(results):
     path = os.path.join(results, "bench", "summary.json")
-    s = load(path)
+    r = load(path)
     text = ["## Speed (`make bench`)", "",
             "One core (`taskset -c 0`), median CPU time; `results/bench/summary.json`, %s, %s." % (
-                stamp(path), (s.get("machine") or {}).get("cpu_model") or "this machine"), "",
+                stamp(path), r["config"].get("cpu_model") or "this machine"), "",
             "| benchmark | median [us] |", "|---|---|"]
-    for b in s["benchmarks"]:
+    for b in r["runs"].values():
         text.append("| %s | %.1f |" % (b["name"], b["median_us"]))
-    if s.get("exponents"):
+    exponents = r.get("tables", {}).get("exponents", {})
+    if exponents:
         text += ["", "| growth with the map size N | exponent |", "|---|---|"]
-        for fam, e in s["exponents"].items():
-            text.append("| %s | %s |" % (fam, f(e, 2)))
-    p = s.get("pipeline") or {}
+        for fam, e in exponents.items():
+            text.append("| %s | %s |" % (fam, f(e["exponent"], 2)))
+    p = r.get("tables", {}).get("pipeline", {}).get("pipeline") or {}
     if p:
         text += ["", "| the whole pipeline (bench/pipeline.py) | value |", "|---|---|"]
         for k in sorted(p):

@@ -166,9 +166,9 @@ glue::NodeParams nodeParams(const Options& o, const std::string& mechanization) 
 }
 
 /// One reference comparison of the run, printed, with its matched positions as CSV.
-nlohmann::json compareRun(const glue::RecordingSink& sink, const glue::InputBagInfo& info, const Reference& ref,
-                          const std::string& csv) {
-  nlohmann::json j = {
+nlohmann::ordered_json compareRun(const glue::RecordingSink& sink, const glue::InputBagInfo& info, const Reference& ref,
+                                  const std::string& csv) {
+  nlohmann::ordered_json j = {
       {"file", ref.path}, {"frame", ref.frame}, {"clock", ref.clock}, {"alignment", eval::toString(ref.alignment)}};
   if (sink.poses.empty()) {
     std::printf("  against %s: no pose since the last reset (lost, not re-initialized)\n", ref.path.c_str());
@@ -213,7 +213,7 @@ nlohmann::json compareRun(const glue::RecordingSink& sink, const glue::InputBagI
 /// One mechanization over the bag: its trajectory, trace, health (into *health) and, with ground
 /// truth, its metrics (into *results).
 void runOne(const Options& o, const std::string& mechanization, const glue::InputBagInfo& info,
-            const glue::InputTopics& topics, const std::vector<Reference>& refs, nlohmann::json* health,
+            const glue::InputTopics& topics, const std::vector<Reference>& refs, eval::Report* health,
             std::vector<std::pair<std::string, eval::RunMetrics>>* results) {
   const glue::NodeParams params = nodeParams(o, mechanization);
   const std::string name = toString(params.filter.mechanization);
@@ -227,7 +227,7 @@ void runOne(const Options& o, const std::string& mechanization, const glue::Inpu
   for (const auto& p : sink.poses) traj.push_back({p.t, p.p, p.q, p.cov});
   eval::writeTum(o.out + "/" + name + ".tum", traj,
                  "t x y z qx qy qz qw (body in the filter's world frame, IMU clock)");
-  nlohmann::json& h = (*health)[name] = eval::runHealth(sink.trace, sink.resets, bag_s, wall);
+  nlohmann::ordered_json& h = health->runs.rows[name] = eval::runHealth(sink.trace, sink.resets, bag_s, wall);
   eval::writeTrace(o.out + "/" + name + "_trace.csv", sink.trace);
   std::cout << eval::healthLine(name, h);
   for (size_t k = 0; k < refs.size(); ++k) {
@@ -260,17 +260,16 @@ std::vector<std::pair<std::string, eval::RunMetrics>> evaluateRecordings(const O
 }
 
 /// health.json / health.md and, with ground truth, summary.json / summary.md, printed too.
-void writeReports(const Options& o, nlohmann::json health,
+void writeReports(const Options& o, eval::Report health,
                   const std::vector<std::pair<std::string, eval::RunMetrics>>& results) {
   const std::string mode = o.recorded.empty() ? "offline" : "live replay";
-  health["config"] = {{"bag", o.bag}, {"config", o.config}, {"mode", mode}};
-  std::ofstream(o.out + "/health.json") << health.dump(2) << "\n";
-  std::ofstream(o.out + "/health.md") << eval::healthTable(health);
-  std::cout << "\n" << eval::healthTable(health);
+  health.config = {{"bag", o.bag}, {"config", o.config}, {"mode", mode}};
+  eval::writeReport(o.out, "health", health);
+  std::cout << "\n" << eval::reportMarkdown(health);
   if (!results.empty()) {
     eval::writeRunReport(o.out, results, {{"bag", o.bag}, {"config", o.config}, {"mode", mode}});
     std::ifstream md(o.out + "/summary.md");
-    std::cout << "\nagainst the bag's ground truth:\n" << md.rdbuf();
+    std::cout << "\n" << md.rdbuf();
   } else {
     fs::remove(o.out + "/summary.json");  // a stale one from an earlier run with ground truth
     std::cout << "\nthe bag has no ground truth (" << glue::RigTopics().ground_truth
@@ -324,7 +323,10 @@ int main(int argc, char** argv) {
   }
   try {
     std::vector<std::pair<std::string, eval::RunMetrics>> results = evaluateRecordings(o, info);
-    nlohmann::json health;
+    eval::Report health;
+    health.tool = "run_bag";
+    health.title = "Run health (no ground truth needed)";
+    health.runs.columns = eval::healthColumns();
     std::vector<std::string> mechanizations = {o.mechanization};
     if (o.mechanization == "all") mechanizations = {"world_centric", "sensor_centric", "sensor_centric_composition"};
     if (!o.recorded.empty()) mechanizations.clear();

@@ -32,6 +32,7 @@
 #include <nlohmann/json.hpp>
 
 #include "cli.h"
+#include "vi_ekf_slam/eval/report.h"
 #include "vi_ekf_slam/sim/monte_carlo.h"
 #include "vi_ekf_slam/core/allocator_tuning.h"
 #include "vi_ekf_slam/eval/datasets.h"
@@ -470,84 +471,89 @@ std::vector<std::vector<sim::RunResult>> runAll(const Options& o, const Configs&
   return results;
 }
 
-/// summary.json: each configuration name -> metrics, plus the settings used (non-finite: null).
-nlohmann::ordered_json summaryJson(const Options& o, const std::string& traj_name, const sim::Scenario& sc,
-                                   const std::vector<double>& offsets, double duration, const Configs& configs,
-                                   const std::vector<sim::ConsistencySummary>& sums) {
-  nlohmann::ordered_json js;
-  js["config"] = {{"trajectory", traj_name},
-                  {"seed", o.seed},
-                  {"runs", o.runs},
-                  {"recorded_imu", o.imu},
-                  {"start", sc.dynamic_init     ? "dynamic"
-                            : sc.start_at_truth ? "truth"
-                                                : "prior"},
-                  {"imu_noise", o.imu_noise},
-                  {"imu_biases", o.imu_biases},
-                  {"start_offsets_s", offsets},
-                  {"duration_s", duration},
-                  {"world_landmarks", sc.world.size()},
-                  {"imu_rate_hz", sc.imu.rate_hz},
-                  {"camera_rate_hz", sc.cam.rate_hz},
-                  {"pixel_noise_px", sc.cam.pixel_noise_px},
-                  {"accel_noise_density", sc.imu.noise.accel_noise_density},
-                  {"gyro_noise_density", sc.imu.noise.gyro_noise_density},
-                  {"accel_random_walk", sc.imu.noise.accel_random_walk},
-                  {"gyro_random_walk", sc.imu.noise.gyro_random_walk},
-                  {"pose_nees_band", {sums[0].pose_band.lo, sums[0].pose_band.hi}}};
+/// summary.json / summary.md: each configuration name -> metrics, with the settings used
+/// (non-finite: null); for dynamic starts, their delays.
+eval::Report summaryReport(const Options& o, const std::string& traj_name, const sim::Scenario& sc,
+                           const std::vector<double>& offsets, double duration, const Configs& configs,
+                           const std::vector<sim::ConsistencySummary>& sums) {
+  eval::Report r;
+  r.tool = "study";
+  std::ostringstream title;
+  title << "Study: " << traj_name << " (" << o.runs << " runs, seed " << o.seed << ", " << std::fixed
+        << std::setprecision(1) << duration << " s, " << sums[0].distance_m << " m)";
+  r.title = title.str();
+  r.config = {{"trajectory", traj_name},
+              {"seed", o.seed},
+              {"runs", o.runs},
+              {"recorded_imu", o.imu},
+              {"start", sc.dynamic_init     ? "dynamic"
+                        : sc.start_at_truth ? "truth"
+                                            : "prior"},
+              {"imu_noise", o.imu_noise},
+              {"imu_biases", o.imu_biases},
+              {"start_offsets_s", offsets},
+              {"duration_s", duration},
+              {"world_landmarks", sc.world.size()},
+              {"imu_rate_hz", sc.imu.rate_hz},
+              {"camera_rate_hz", sc.cam.rate_hz},
+              {"pixel_noise_px", sc.cam.pixel_noise_px},
+              {"accel_noise_density", sc.imu.noise.accel_noise_density},
+              {"gyro_noise_density", sc.imu.noise.gyro_noise_density},
+              {"accel_random_walk", sc.imu.noise.accel_random_walk},
+              {"gyro_random_walk", sc.imu.noise.gyro_random_walk},
+              {"pose_nees_band", {sums[0].pose_band.lo, sums[0].pose_band.hi}}};
   for (size_t c = 0; c < sums.size(); ++c) {
     const auto& s = sums[c];
     const auto& cfg = configs[c].second;
-    js[s.name] = {{"mechanization", toString(cfg.mechanization)},
-                  {"landmark_init", toString(cfg.landmark_init)},
-                  {"composition_trigger", toString(cfg.composition_trigger)},
-                  {"ate_position_m", s.ate_position_m},
-                  {"ate_posyaw_m", s.ate_posyaw_m},
-                  {"real_time_factor", s.real_time_factor},
-                  {"ate_orientation_deg", s.ate_orientation_deg},
-                  {"final_position_error_m", s.final_position_error_m},
-                  {"final_position_error_pct", s.final_position_error_pct},
-                  {"distance_m", s.distance_m},
-                  {"nees_position", s.nees_position},
-                  {"nees_orientation", s.nees_orientation},
-                  {"nees_pose", s.nees_pose},
-                  {"consistent_fraction", s.consistent_fraction},
-                  {"final_scale_ratio", s.final_scale_ratio},
-                  {"runs", s.runs},
-                  {"filter_ms_mean", s.mean_update_ms},
-                  {"filter_ms_p95", s.p95_update_ms},
-                  {"nees_pose_first_10s", s.nees_pose_early},
-                  {"runs_started", s.runs_started},
-                  {"init_delay_s", s.init_delay_s},
-                  {"ate_posyaw_runs_m", s.ate_posyaw_runs_m}};
+    r.runs.rows[s.name] = {{"mechanization", toString(cfg.mechanization)},
+                           {"landmark_init", toString(cfg.landmark_init)},
+                           {"composition_trigger", toString(cfg.composition_trigger)},
+                           {"ate_position_m", s.ate_position_m},
+                           {"ate_posyaw_m", s.ate_posyaw_m},
+                           {"real_time_factor", s.real_time_factor},
+                           {"ate_orientation_deg", s.ate_orientation_deg},
+                           {"final_position_error_m", s.final_position_error_m},
+                           {"final_position_error_pct", s.final_position_error_pct},
+                           {"distance_m", s.distance_m},
+                           {"nees_position", s.nees_position},
+                           {"nees_orientation", s.nees_orientation},
+                           {"nees_pose", s.nees_pose},
+                           {"consistent_fraction", s.consistent_fraction},
+                           {"final_scale_ratio", s.final_scale_ratio},
+                           {"runs", s.runs},
+                           {"filter_ms_mean", s.mean_update_ms},
+                           {"filter_ms_p95", s.p95_update_ms},
+                           {"nees_pose_first_10s", s.nees_pose_early},
+                           {"runs_started", s.runs_started},
+                           {"init_delay_s", s.init_delay_s},
+                           {"ate_posyaw_runs_m", s.ate_posyaw_runs_m}};
   }
-  return js;
-}
-
-/// summary.md: the consistency table and, for dynamic starts, the start delays.
-std::string summaryMarkdown(const Options& o, const std::string& traj_name, const sim::Scenario& sc, double duration,
-                            const std::vector<sim::ConsistencySummary>& sums) {
-  std::ostringstream md;
-  md << "# Study: " << traj_name << " (" << o.runs << " runs, seed " << o.seed << ", " << std::fixed
-     << std::setprecision(1) << duration << " s, " << sums[0].distance_m << " m)\n\n"
-     << "Pose NEES 95% band for the run average: [" << std::setprecision(2) << sums[0].pose_band.lo << ", "
-     << sums[0].pose_band.hi << "] (6 dof).\n\n"
-     << "| configuration | ATE pos [m] | ATE posyaw [m] | ATE rot [deg] | final err [m] | final err [%] | NEES pos "
-        "| NEES rot | NEES pose | consistent | final gamma | filter [ms] (p95) | real-time factor |\n"
-     << "|---|---|---|---|---|---|---|---|---|---|---|---|---|\n";
-  for (const auto& s : sums) {
-    md << "| " << s.name << " | " << std::setprecision(3) << s.ate_position_m << " | " << s.ate_posyaw_m << " | "
-       << s.ate_orientation_deg << " | " << s.final_position_error_m << " | " << std::setprecision(2)
-       << s.final_position_error_pct << " | " << s.nees_position << " | " << s.nees_orientation << " | " << s.nees_pose
-       << " | " << s.consistent_fraction << " | " << std::setprecision(3) << s.final_scale_ratio << " | "
-       << std::setprecision(2) << s.mean_update_ms << " (" << s.p95_update_ms << ") | " << std::setprecision(1)
-       << s.real_time_factor << " |\n";
-  }
+  r.runs.columns = {{"ate_position_m", "ATE pos [m]", 3},
+                    {"ate_posyaw_m", "ATE posyaw [m]", 3},
+                    {"ate_orientation_deg", "ATE rot [deg]", 3},
+                    {"final_position_error_m", "final err [m]", 3},
+                    {"final_position_error_pct", "final err [%]", 2},
+                    {"nees_position", "NEES pos", 2},
+                    {"nees_orientation", "NEES rot", 2},
+                    {"nees_pose", "NEES pose", 2},
+                    {"consistent_fraction", "consistent", 2},
+                    {"final_scale_ratio", "final gamma", 3},
+                    {"filter_ms_mean", "filter [ms]", 2},
+                    {"filter_ms_p95", "filter p95 [ms]", 2},
+                    {"real_time_factor", "real-time factor", 1}};
+  std::ostringstream band;
+  band << "Pose NEES 95% band for the run average: [" << std::fixed << std::setprecision(2) << sums[0].pose_band.lo
+       << ", " << sums[0].pose_band.hi << "] (6 dof).";
+  r.notes.push_back(band.str());
   if (sc.dynamic_init) {
-    md << "\nDynamic initialization (`--init dynamic`): delay from the start; the table above is over the runs that "
-          "initialized, from their initialization on.\n\n"
-       << "| configuration | initialized | within 1.5 s | delay mean [s] | delay max [s] | NEES pose, first "
-       << sim::kEarlyWindowS << " s |\n|---|---|---|---|---|---|\n";
+    eval::ReportTable t;
+    t.heading = "Dynamic initialization (--init dynamic)";
+    t.columns = {
+        {"initialized", "initialized", 0},
+        {"within_1_5_s", "within 1.5 s", 0},
+        {"delay_mean_s", "delay mean [s]", 2},
+        {"delay_max_s", "delay max [s]", 2},
+        {"nees_pose_first_10s", "NEES pose, first " + std::to_string(static_cast<int>(sim::kEarlyWindowS)) + " s", 2}};
     for (const auto& s : sums) {
       double sum = 0.0, worst = 0.0;
       int fast = 0;
@@ -557,12 +563,18 @@ std::string summaryMarkdown(const Options& o, const std::string& traj_name, cons
         worst = std::max(worst, d);
         fast += d <= 1.5;
       }
-      md << "| " << s.name << " | " << s.runs << "/" << s.runs_started << " | " << fast << "/" << s.runs_started
-         << " | " << std::setprecision(2) << (s.runs ? sum / s.runs : std::nan("")) << " | " << worst << " | "
-         << s.nees_pose_early << " |\n";
+      t.rows[s.name] = {{"initialized", std::to_string(s.runs) + "/" + std::to_string(s.runs_started)},
+                        {"within_1_5_s", std::to_string(fast) + "/" + std::to_string(s.runs_started)},
+                        {"delay_mean_s", s.runs ? sum / s.runs : std::nan("")},
+                        {"delay_max_s", worst},
+                        {"nees_pose_first_10s", s.nees_pose_early}};
     }
+    r.tables.emplace_back("dynamic_start", t);
+    r.notes.push_back(
+        "Dynamic initialization: the delay from the start; the first table is over the runs that initialized, "
+        "from their initialization on.");
   }
-  return md.str();
+  return r;
 }
 
 /// --list-configs: every configuration's name and the sets it belongs to.
@@ -612,10 +624,8 @@ int main(int argc, char** argv) {
     sums.push_back(sim::summarize(configs[c].first, results[c]));
     writeConfigFiles(out / configs[c].first, sums.back(), results[c], sc, o.all_runs);
   }
-  std::ofstream(out / "summary.json") << summaryJson(o, traj_name, sc, offsets, duration, configs, sums).dump(2)
-                                      << "\n";
-  const std::string md = summaryMarkdown(o, traj_name, sc, duration, sums);
-  std::ofstream(out / "summary.md") << md;
-  std::cout << "\n" << md << "\nwritten to " << out << "\n";
+  const eval::Report report = summaryReport(o, traj_name, sc, offsets, duration, configs, sums);
+  eval::writeReport(out.string(), "summary", report);
+  std::cout << "\n" << eval::reportMarkdown(report) << "written to " << out << "\n";
   return 0;
 }

@@ -17,13 +17,13 @@ pose NEES and consistent fraction per seed, and the worst case over all cases an
 """
 import argparse
 import glob
-import json
 import math
 import os
 import subprocess
 import sys
 import time
 
+import report
 from study_cli import add_study_options, resolve_tools
 
 HERE = os.path.dirname(os.path.abspath(__file__))
@@ -109,8 +109,7 @@ def run_cases(a, seed, out_dir, walks, configs):
             results[name] = {"failed": lines[-1] if lines else "exit status %d" % proc.returncode}
             print("  %-34s FAILED: %s" % (name, results[name]["failed"]), flush=True)
             continue
-        with open(os.path.join(out, "summary.json")) as f:
-            results[name] = json.load(f)
+        results[name] = report.load(os.path.join(out, "summary.json"))
         print("  %-34s %5.0f s" % (name, time.time() - t0), flush=True)
 
     # Per case: each configuration's metrics and its ATE over the best of the paper's three.
@@ -127,10 +126,11 @@ def run_cases(a, seed, out_dir, walks, configs):
                 add_to_worst(worst[c], row)
             continue
         band = s["config"]["pose_nees_band"]
-        paper_ate = [s[c]["ate_position_m"] for c in paper if c in s and s[c]["ate_position_m"] is not None]
+        study = s["runs"]
+        paper_ate = [study[c]["ate_position_m"] for c in paper if c in study and study[c]["ate_position_m"] is not None]
         best_paper = min(paper_ate) if paper_ate else None
         for c in configs:
-            m = s[c]
+            m = study[c]
             ratio = m["ate_position_m"] / best_paper if best_paper else None
             inside = m["nees_pose"] is not None and band[0] <= m["nees_pose"] <= band[1]
             row = {"case": name, "config": c, "ate_m": m["ate_position_m"], "ate_posyaw_m": m["ate_posyaw_m"],
@@ -138,25 +138,16 @@ def run_cases(a, seed, out_dir, walks, configs):
                    "ate_over_best_paper": ratio, "nees_inside_band": inside}
             rows.append(row)
             add_to_worst(worst[c], row)
-    os.makedirs(out_dir, exist_ok=True)
-    with open(os.path.join(out_dir, "suite.json"), "w") as f:
-        json.dump({"runs": a.runs, "seed": seed, "pose_nees_band": band, "rows": rows, "worst": worst,
-                   "minutes": (time.time() - t_start) / 60}, f, indent=1)
-
     if band is None:
         sys.exit("suite: the study failed on every case")
-    lines = ["# Suite: %d cases, %d runs each, seed %d (pose NEES 95%% band [%.2f, %.2f])" %
-             (len(results), a.runs, seed, band[0], band[1]), "",
-             "| case | configuration | ATE [m] | ATE posyaw [m] | NEES pose | consistent | ATE / best paper |",
-             "|---|---|---|---|---|---|---|"]
-    for r in rows:
-        lines.append("| %s | %s | %s | %s | %s | %s | %s |" % (
-            r["case"], r["config"], fmt(r["ate_m"]), fmt(r["ate_posyaw_m"]), nees_cell(r),
-            fmt(r["consistent_fraction"], 2), fmt(r["ate_over_best_paper"], 2)))
-    lines += ["", "Worst case over the %d cases:" % len(results), ""] + worst_table(worst, configs)
-    text = "\n".join(lines) + "\n"
-    with open(os.path.join(out_dir, "suite.md"), "w") as f:
-        f.write(text)
+    r = report.report(
+        "suite", "Suite: %d cases, %d runs each, seed %d" % (len(results), a.runs, seed),
+        {"runs": a.runs, "seed": seed, "pose_nees_band": band, "minutes": (time.time() - t_start) / 60},
+        {"%s / %s" % (row["case"], row["config"]): row for row in rows}, {"worst": worst})
+    text = report.write_report(out_dir, "suite", r, columns=row_columns(rows),
+                               table_columns={"worst": WORST_COLUMNS + ([("failed", "cases failed", 0)]
+                                                                        if any_failed(rows) else [])},
+                               headings={"worst": "Worst case over the %d cases" % len(results)})
     print(text)
     return rows, band
 
@@ -166,6 +157,18 @@ def nees_cell(row):
     if "failed" in row:
         return "failed (%s)" % row["failed"].replace("|", "/")
     return fmt(row["nees_pose"], 2) + ("" if row["nees_inside_band"] else " (!)")
+
+
+def row_columns(rows):
+    """The suite table's columns (with the reason of a case the study could not run, if any)."""
+    cols = [("ate_m", "ATE [m]", 3), ("ate_posyaw_m", "ATE posyaw [m]", 3), ("nees_pose", "NEES pose", 2),
+            ("nees_inside_band", "inside band", 0), ("consistent_fraction", "consistent", 2),
+            ("ate_over_best_paper", "ATE / best paper", 2)]
+    return cols + ([("failed", "failed", 0)] if any_failed(rows) else [])
+
+
+WORST_COLUMNS = [("nees_pose", "max NEES pose", 2), ("outside_band", "cases outside the band", 0),
+                 ("consistent_fraction", "min consistent", 2), ("ate_ratio", "max ATE / best paper", 2)]
 
 
 def new_worst():
@@ -182,19 +185,6 @@ def add_to_worst(w, row):
     if row["ate_over_best_paper"] is not None:  # (none without the paper's configurations)
         w["ate_ratio"] = max(w["ate_ratio"] or 0.0, row["ate_over_best_paper"])
     w["outside_band"] += 0 if row["nees_inside_band"] else 1
-
-
-def worst_table(worst, configs):
-    failed = any(worst[c]["failed"] for c in configs)
-    lines = ["| configuration | max NEES pose | cases outside the band | min consistent | max ATE / best paper |" +
-             (" cases failed |" if failed else ""),
-             "|---|---|---|---|---|" + ("---|" if failed else "")]
-    for c in configs:
-        w = worst[c]
-        lines.append("| %s | %s | %d | %s | %s |" % (c, fmt(w["nees_pose"], 2), w["outside_band"],
-                                                     fmt(w["consistent_fraction"], 2), fmt(w["ate_ratio"], 2)) +
-                     (" %d |" % w["failed"] if failed else ""))
-    return lines
 
 
 def any_failed(rows):
@@ -232,26 +222,24 @@ def main():
         rows, band = run_cases(a, seed, os.path.join(a.out, "seed_%d" % seed), walks, configs)
         per_seed[seed] = {(r["case"], r["config"]): r for r in rows}
     worst = {c: new_worst() for c in configs}
-    lines = ["# Suite: %d runs per case, seeds %s (pose NEES 95%% band [%.2f, %.2f])" %
-             (a.runs, ", ".join(map(str, seeds)), band[0], band[1]), "",
-             "| case | configuration | " + " | ".join("seed %d: NEES pose (consistent)" % s for s in seeds) + " |",
-             "|---|---|" + "---|" * len(seeds)]
+    runs = {}
     for key in per_seed[seeds[0]]:
-        cells = []
+        row = {"case": key[0], "config": key[1]}
         for seed in seeds:
             r = per_seed[seed][key]
             add_to_worst(worst[key[1]], r)
-            cells.append("%s (%s)" % (nees_cell(r), fmt(r["consistent_fraction"], 2)))
-        lines.append("| %s | %s | %s |" % (key[0], key[1], " | ".join(cells)))
-    lines += ["", "Worst case over every case and seed (cases outside the band counted once per seed):", ""]
-    lines += worst_table(worst, configs)
-    text = "\n".join(lines) + "\n"
-    with open(os.path.join(a.out, "suite_seeds.md"), "w") as f:
-        f.write(text)
-    with open(os.path.join(a.out, "suite_seeds.json"), "w") as f:
-        json.dump({"runs": a.runs, "seeds": seeds, "pose_nees_band": band, "worst": worst,
-                   "rows": [per_seed[s][k] | {"seed": s} for s in seeds for k in per_seed[s]],
-                   "minutes": (time.time() - t_start) / 60}, f, indent=1)
+            row["seed_%d_nees_pose" % seed] = r["nees_pose"]
+            row["seed_%d_consistent" % seed] = r["consistent_fraction"]
+            row["seed_%d_failed" % seed] = r.get("failed")
+        runs["%s / %s" % key] = row
+    r = report.report("suite", "Suite: %d runs per case, seeds %s" % (a.runs, ", ".join(map(str, seeds))),
+                      {"runs": a.runs, "seeds": seeds, "pose_nees_band": band,
+                       "minutes": (time.time() - t_start) / 60}, runs, {"worst": worst})
+    columns = [c for seed in seeds for c in (("seed_%d_nees_pose" % seed, "seed %d: NEES pose" % seed, 2),
+                                              ("seed_%d_consistent" % seed, "consistent", 2))]
+    text = report.write_report(
+        a.out, "suite_seeds", r, columns=columns, table_columns={"worst": WORST_COLUMNS + [("failed", "cases failed", 0)]},
+        headings={"worst": "Worst case over every case and seed (outside the band: counted once per seed)"})
     print(text)
     print("suite: %.1f min, written to %s (seed_N/ per seed, suite_seeds.md)" % ((time.time() - t_start) / 60, a.out))
     if any(any_failed(per_seed[s].values()) for s in seeds):

@@ -10,6 +10,7 @@
 #include <sstream>
 
 #include "vi_ekf_slam/core/chi_squared.h"
+#include "vi_ekf_slam/eval/report.h"
 #include "vi_ekf_slam/core/so3.h"
 
 namespace vi_ekf_slam::eval {
@@ -128,47 +129,47 @@ RunMetrics evaluateRun(const std::vector<EstimatedPose>& est, const std::vector<
 
 void writeRunReport(const std::string& dir, const std::vector<std::pair<std::string, RunMetrics>>& runs,
                     const nlohmann::ordered_json& config) {
-  std::filesystem::create_directories(dir);
-  nlohmann::ordered_json js;  // non-finite numbers are written as null
-  js["config"] = config;
+  Report r;
+  r.tool = "run_bag";
+  r.title = "Runs against the ground truth";
+  r.config = config;
   for (const auto& [name, m] : runs) {
-    js[name] = {{"ate_position_m", m.ate_position_m},
-                {"ate_posyaw_m", m.ate_posyaw_m},
-                {"ate_orientation_deg", m.ate_orientation_deg},
-                {"final_position_error_m", m.final_position_error_m},
-                {"final_position_error_pct", m.final_position_error_pct},
-                {"distance_m", m.distance_m},
-                {"nees_position", m.nees_position},
-                {"nees_orientation", m.nees_orientation},
-                {"nees_pose", m.nees_pose},
-                {"consistent_fraction", m.consistent_fraction},
-                {"final_scale_ratio", m.final_scale_ratio},
-                {"map_landmarks", m.map_landmarks},
-                {"map_error_median_m", m.map_error_median_m},
-                {"map_error_p90_m", m.map_error_p90_m},
-                {"runs", 1},
-                {"frames", m.frames},
-                {"duration_s", m.duration_s},
-                {"processing_ms_mean", m.processing_ms_mean},
-                {"processing_ms_p95", m.processing_ms_p95},
-                {"tracker_ms_mean", m.tracker_ms_mean},
-                {"real_time_factor", m.real_time_factor}};
+    r.runs.rows[name] = {{"ate_position_m", m.ate_position_m},
+                         {"ate_posyaw_m", m.ate_posyaw_m},
+                         {"ate_orientation_deg", m.ate_orientation_deg},
+                         {"final_position_error_m", m.final_position_error_m},
+                         {"final_position_error_pct", m.final_position_error_pct},
+                         {"distance_m", m.distance_m},
+                         {"nees_position", m.nees_position},
+                         {"nees_orientation", m.nees_orientation},
+                         {"nees_pose", m.nees_pose},
+                         {"consistent_fraction", m.consistent_fraction},
+                         {"final_scale_ratio", m.final_scale_ratio},
+                         {"map_landmarks", m.map_landmarks},
+                         {"map_error_median_m", m.map_error_median_m},
+                         {"map_error_p90_m", m.map_error_p90_m},
+                         {"runs", 1},
+                         {"frames", m.frames},
+                         {"duration_s", m.duration_s},
+                         {"processing_ms_mean", m.processing_ms_mean},
+                         {"processing_ms_p95", m.processing_ms_p95},
+                         {"tracker_ms_mean", m.tracker_ms_mean},
+                         {"real_time_factor", m.real_time_factor}};
   }
-  std::ofstream(dir + "/summary.json") << js.dump(2) << "\n";
-  std::ofstream md(dir + "/summary.md");
-  md << "| run | ATE [m] | ATE posyaw [m] | ATE rot [deg] | final err [m] | final err [% of dist] | NEES pos | NEES "
-        "rot "
-        "| NEES pose | gamma | map err median [m] | ms/frame (p95) | real-time factor |\n"
-        "|---|---|---|---|---|---|---|---|---|---|---|---|---|\n"
-     << std::fixed;
-  for (const auto& [name, m] : runs) {
-    md << "| " << name << " | " << std::setprecision(3) << m.ate_position_m << " | " << m.ate_posyaw_m << " | "
-       << m.ate_orientation_deg << " | " << m.final_position_error_m << " | " << std::setprecision(2)
-       << m.final_position_error_pct << " | " << m.nees_position << " | " << m.nees_orientation << " | " << m.nees_pose
-       << " | " << std::setprecision(3) << m.final_scale_ratio << " | " << m.map_error_median_m << " | "
-       << std::setprecision(1) << m.processing_ms_mean << " (" << m.processing_ms_p95 << ") | " << m.real_time_factor
-       << " |\n";
-  }
+  r.runs.columns = {{"ate_position_m", "ATE [m]", 3},
+                    {"ate_posyaw_m", "ATE posyaw [m]", 3},
+                    {"ate_orientation_deg", "ATE rot [deg]", 3},
+                    {"final_position_error_m", "final err [m]", 3},
+                    {"final_position_error_pct", "final err [% of dist]", 2},
+                    {"nees_position", "NEES pos", 2},
+                    {"nees_orientation", "NEES rot", 2},
+                    {"nees_pose", "NEES pose", 2},
+                    {"final_scale_ratio", "gamma", 3},
+                    {"map_error_median_m", "map err median [m]", 3},
+                    {"processing_ms_mean", "ms/frame", 1},
+                    {"processing_ms_p95", "ms/frame p95", 1},
+                    {"real_time_factor", "real-time factor", 1}};
+  writeReport(dir, "summary", r);
   for (const auto& [name, m] : runs) {
     std::ofstream ts(dir + "/" + name + "_timeseries.csv");
     ts << "t,tx,ty,tz,ex,ey,ez,e_p_x,e_p_y,e_p_z,s_p_x,s_p_y,s_p_z,e_q_x,e_q_y,e_q_z,s_q_x,s_q_y,s_q_z,nees_pose\n"

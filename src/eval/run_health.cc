@@ -8,8 +8,8 @@
 
 namespace vi_ekf_slam::eval {
 
-nlohmann::json runHealth(const std::vector<StatusSample>& tr, int resets, double input_s, double wall_s) {
-  nlohmann::json h;
+nlohmann::ordered_json runHealth(const std::vector<StatusSample>& tr, int resets, double input_s, double wall_s) {
+  nlohmann::ordered_json h;
   double path = 0.0, tracks = 0.0, accepted = 0.0, rejected = 0.0, nis = 0.0, ms = 0.0, tracker_ms = 0.0;
   int nis_n = 0, min_tracks = tr.empty() ? 0 : 1 << 30;
   std::vector<double> speeds;
@@ -52,7 +52,7 @@ nlohmann::json runHealth(const std::vector<StatusSample>& tr, int resets, double
   return h;
 }
 
-std::string healthLine(const std::string& name, const nlohmann::json& h) {
+std::string healthLine(const std::string& name, const nlohmann::ordered_json& h) {
   char buf[1024];
   std::snprintf(
       buf, sizeof(buf),
@@ -68,31 +68,21 @@ std::string healthLine(const std::string& name, const nlohmann::json& h) {
   return buf;
 }
 
-std::string healthTable(const nlohmann::json& health) {
-  std::ostringstream md;
-  md << "| run | images | resets | path [m] | speed p99 [m/s] | tracks | accepted | rejected | NIS/dof | time "
-        "offset [s] | ms/image | real-time factor | ref. RMSE [m] | ref. scale | ref. rot [deg] |\n"
-        "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|\n"
-     << std::fixed;
-  for (const auto& [name, h] : health.items()) {
-    if (name == "config") continue;
-    md << "| " << name << " | " << h["images"].get<int>() << " | " << h["resets"].get<int>() << " | "
-       << std::setprecision(2) << h["path_length_m"].get<double>() << " | " << h["speed_p99_mps"].get<double>() << " | "
-       << std::setprecision(1) << h["tracks_mean"].get<double>() << " | " << h["accepted_per_image"].get<double>()
-       << " | " << h["rejected_per_image"].get<double>() << " | " << std::setprecision(2)
-       << h["nis_per_dof_mean"].get<double>() << " | " << std::setprecision(4) << h["time_offset_s"].get<double>()
-       << " | " << std::setprecision(1) << h["processing_ms_mean"].get<double>() << " | "
-       << h["real_time_factor"].get<double>() << " | ";
-    if (h.contains("references") && h["references"][0].contains("position_rmse_m")) {
-      const auto& r = h["references"][0];
-      md << std::setprecision(3) << r["position_rmse_m"].get<double>() << " | "
-         << r["scale_reference_units_per_m"].get<double>() << " | " << std::setprecision(2)
-         << r["rotation_rmse_deg"].get<double>() << " |\n";
-    } else {
-      md << "- | - | - |\n";
-    }
-  }
-  return md.str();
+std::vector<ReportColumn> healthColumns() {
+  return {{"images", "images", 0},
+          {"resets", "resets", 0},
+          {"path_length_m", "path [m]", 2},
+          {"speed_p99_mps", "speed p99 [m/s]", 2},
+          {"tracks_mean", "tracks", 1},
+          {"accepted_per_image", "accepted", 1},
+          {"rejected_per_image", "rejected", 1},
+          {"nis_per_dof_mean", "NIS/dof", 2},
+          {"time_offset_s", "time offset [s]", 4},
+          {"processing_ms_mean", "ms/image", 1},
+          {"real_time_factor", "real-time factor", 1},
+          {"/references/0/position_rmse_m", "ref. RMSE [m]", 3},
+          {"/references/0/scale_reference_units_per_m", "ref. scale", 3},
+          {"/references/0/rotation_rmse_deg", "ref. rot [deg]", 2}};
 }
 
 void writeTrace(const std::string& path, const std::vector<StatusSample>& samples) {

@@ -131,7 +131,7 @@ TEST(ToolsCli, RunBagPicksTopicsAndReadsCompressedImages) {
   EXPECT_EQ(refs.code, 0) << refs.output;
   // What run_bag wrote for the two comparisons (health.json: one entry per reference).
   const nlohmann::json refs_json =
-      nlohmann::json::parse(std::ifstream(dir + "/out/health.json"))["world_centric"]["references"];
+      nlohmann::json::parse(std::ifstream(dir + "/out/health.json"))["runs"]["world_centric"]["references"];
   ASSERT_EQ(refs_json.size(), 2u) << refs_json.dump();
   const int whole = refs_json[0]["matched"], from_4 = refs_json[1]["matched"];
   EXPECT_EQ(refs_json[1]["from_s"], 4.0) << refs_json.dump();
@@ -159,8 +159,8 @@ while [ $# -gt 0 ]; do
 done
 case "$traj" in *broken*) echo "error: $traj:2: time does not increase" >&2; exit 1;; esac
 mkdir -p "$out"
-echo '{"config": {"pose_nees_band": [3.84, 8.63]}, "default": {"ate_position_m": 0.2, "ate_posyaw_m": 0.1,
- "nees_pose": 6.1, "consistent_fraction": 0.97}}' > "$out/summary.json"
+echo '{"schema": "vi_ekf_slam.report/1", "tool": "study", "title": "stand-in", "config": {"pose_nees_band": [3.84, 8.63]},
+ "runs": {"default": {"ate_position_m": 0.2, "ate_posyaw_m": 0.1, "nees_pose": 6.1, "consistent_fraction": 0.97}}}' > "$out/summary.json"
 )";
   ASSERT_EQ(run("chmod +x " + dir + "/study.sh").code, 0);
   const std::string suite = "python3 " + std::string(VI_EKF_SLAM_SOURCE_DIR) + "/tools/suite.py --study " + dir +
@@ -168,21 +168,27 @@ echo '{"config": {"pose_nees_band": [3.84, 8.63]}, "default": {"ate_position_m":
                             "/out --runs 2 --configs default";
   const Outcome o = run(suite);
   EXPECT_EQ(o.code, 1) << o.output;
-  EXPECT_NE(o.output.find("| broken@0 | default | - | - | failed (error: " + dir +
-                          "/data/trajectories/broken.txt:2: time does not increase) |"),
+  EXPECT_NE(o.output.find("| broken@0 / default | - | - | - | no | - | - | error: " + dir +
+                          "/data/trajectories/broken.txt:2: time does not increase |"),
             std::string::npos)
       << o.output;
-  EXPECT_NE(o.output.find("| walk@0 | default | 0.200 | 0.100 | 6.10 | 0.97 |"), std::string::npos) << o.output;
-  EXPECT_NE(o.output.find("| walk_stairs | default | 0.200 |"), std::string::npos) << o.output;
+  EXPECT_NE(o.output.find("| walk@0 / default | 0.200 | 0.100 | 6.10 | yes | 0.97 |"), std::string::npos) << o.output;
+  EXPECT_NE(o.output.find("| walk_stairs / default | 0.200 |"), std::string::npos) << o.output;
   // The worst case counts it as failed, not as a NEES.
   EXPECT_NE(o.output.find("| default | 6.10 | 0 | 0.97 | - | 1 |"), std::string::npos) << o.output;
   EXPECT_TRUE(std::ifstream(dir + "/out/suite.md").good());
+  // The suite's report in the tools' one schema, its cases and worst case as tables.
+  const nlohmann::json suite_json = nlohmann::json::parse(std::ifstream(dir + "/out/suite.json"));
+  EXPECT_EQ(suite_json["schema"], "vi_ekf_slam.report/1");
+  EXPECT_EQ(suite_json["tool"], "suite");
+  EXPECT_EQ(suite_json["runs"]["walk@0 / default"]["nees_pose"], 6.1);
+  EXPECT_EQ(suite_json["tables"]["worst"]["default"]["failed"], 1);
 
   // --walks: the named generated walks and no others, also in a folder that held the
   // default ones; an unknown kind ends the suite before any case runs.
   const Outcome w = run(suite + " --walks slow_walk,stairs");
-  EXPECT_NE(w.output.find("| walk_slow_walk | default | 0.200 |"), std::string::npos) << w.output;
-  EXPECT_NE(w.output.find("| walk_stairs | default | 0.200 |"), std::string::npos) << w.output;
+  EXPECT_NE(w.output.find("| walk_slow_walk / default | 0.200 |"), std::string::npos) << w.output;
+  EXPECT_NE(w.output.find("| walk_stairs / default | 0.200 |"), std::string::npos) << w.output;
   EXPECT_EQ(w.output.find("walk_crawl"), std::string::npos) << w.output;
   const Outcome unknown = run(suite + " --walks nope");
   EXPECT_NE(unknown.code, 0);
@@ -248,7 +254,11 @@ TEST(ToolsCli, StudyRunsAnImuWithoutBiasesWhenAsked) {
   EXPECT_LT(largest_accel_bias_error("none"), 0.005);
   EXPECT_GT(largest_accel_bias_error("drawn"), 0.02);  // six draws of a 0.05 m/s^2 sigma
   std::ifstream summary(dir + "/none/summary.json");
-  EXPECT_EQ(nlohmann::json::parse(summary)["config"]["imu_biases"], "none");
+  const nlohmann::json s = nlohmann::json::parse(summary);
+  EXPECT_EQ(s["schema"], "vi_ekf_slam.report/1");
+  EXPECT_EQ(s["tool"], "study");
+  EXPECT_EQ(s["config"]["imu_biases"], "none");
+  EXPECT_EQ(s["runs"]["default"]["runs"], 2);
   const Outcome bad = run(std::string(VI_TOOL_STUDY) + " --imu-biases zero");
   EXPECT_EQ(bad.code, 2) << bad.output;
   EXPECT_NE(bad.output.find("--imu-biases must be drawn or none"), std::string::npos) << bad.output;

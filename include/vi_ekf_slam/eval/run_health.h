@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "vi_ekf_slam/core/so3.h"
+#include "vi_ekf_slam/eval/report.h"
 
 namespace vi_ekf_slam::eval {
 
@@ -27,12 +28,11 @@ struct StatusSample {
 
 /// The health of one run: samples of every processed image (across resets), the resets, the
 /// input's duration and the wall time it took [s].
-nlohmann::json runHealth(const std::vector<StatusSample>& samples, int resets, double input_s, double wall_s);
+nlohmann::ordered_json runHealth(const std::vector<StatusSample>& samples, int resets, double input_s, double wall_s);
 /// One run's health as two lines of text.
-std::string healthLine(const std::string& name, const nlohmann::json& h);
-/// The runs' health (keyed by name; "config" is skipped) as a Markdown table, with the first
-/// reference comparison's figures where present.
-std::string healthTable(const nlohmann::json& health);
+std::string healthLine(const std::string& name, const nlohmann::ordered_json& h);
+/// The health report's Markdown columns (with the first reference comparison's figures).
+std::vector<ReportColumn> healthColumns();
 /// Every sample as CSV.
 void writeTrace(const std::string& path, const std::vector<StatusSample>& samples);
 
