@@ -18,7 +18,7 @@ DEVEL    := $(WS)/devel
 BIN      := $(DEVEL)/lib/vi_ekf_slam
 CATKIN   := cd $(WS) && catkin_make -j$(JOBS) -DCMAKE_BUILD_TYPE=Release -DDATA_DIR=$(DATA_DIR) -DCMAKE_EXPORT_COMPILE_COMMANDS=ON -DVI_EKF_SLAM_NATIVE_ARCH=$(NATIVE)
 
-.PHONY: all deps workspace build test lint demo study suite initsuite bag screenshot bench soak realdata params results rebuild-check clean help
+.PHONY: all deps workspace build test lint demo study suite initsuite bag screenshot bench soak realdata faults params results rebuild-check clean help
 
 BAG ?= results/bags/hallway.bag
 RVIZ ?= 0
@@ -50,6 +50,7 @@ help:
 	@echo "make suite  - the study over every trajectory in windows + generated walks, one table with worst cases -> results/suite"
 	@echo "make initsuite - starts mid-walk as the node starts, against starts from the truth and from the prior (docs/initialization.md) -> results/init_suite"
 	@echo "make realdata - the real hand-held recording (DATA_DIR/dmvio_handheld) -> results/realdata"
+	@echo "make faults - faulty copies of the real recording and the rendered walk, one fault class at a time -> results/faults"
 	@echo "make bench  - benchmarks (core vs map size, tracker, pipeline) -> results/bench/summary.json"
 	@echo "make soak   - 30 min endurance walk per mechanization (SOAK_MINUTES=) -> results/soak"
 	@echo "make results - docs/results.md (and the README's quote) from the results of demo, realdata, suite, bench"
@@ -195,6 +196,13 @@ $(REAL_BAG): $(BIN)/vi_ekf_slam_asl_to_bag
 realdata: build $(REAL_BAG)
 	source $(DEVEL)/setup.bash && $(BIN)/vi_ekf_slam_run_bag --bag $(REAL_BAG) --out results/realdata/defaults --mechanization all $(REAL_REFS)
 	source $(DEVEL)/setup.bash && $(BIN)/vi_ekf_slam_run_bag --bag $(REAL_BAG) --out results/realdata/rig --rig config/dmvio_handheld.yaml $(REAL_REFS)
+
+# Faults (docs/evaluation.md): faulty copies of the real hand-held recording and of the rendered
+# walk, one class at a time (clipped IMU samples, sensor gaps, a covered lens, NaN IMU samples, dim
+# images, a lossy link), each through the node's processor; one table (results/faults/faults.md).
+faults: build $(REAL_BAG) $(BAG)
+	source $(DEVEL)/setup.bash && python3 tools/fault_matrix.py --bin $(BIN) --out results/faults \
+	  --bag real=$(REAL_BAG):$(REAL)/reference/sfm_camera_poses.txt --bag rendered=$(BAG)
 
 # Endurance: a 30-minute walk (laps) per mechanization through the core; error, map size and
 # resident memory over time (a 4-minute version runs in make test).

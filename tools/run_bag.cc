@@ -159,9 +159,10 @@ glue::NodeParams nodeParams(const Options& o, const std::string& mechanization) 
   glue::NodeParams params;
   const std::string err = glue::loadParams(yaml, &params);
   if (!err.empty()) throw std::runtime_error("impossible parameter values:\n" + err);
-  // The evaluation is of the filter in its own world, which restarts at every reset (and so does
-  // the evaluated segment); the node's odom frame would join the segments.
-  params.node.publish_tf = glue::TfMode::kWorld;
+  // The whole run in the node's continuous odom frame (of the IMU): a reset continues from the last
+  // pose, and is marked in <run>_events.csv.
+  params.node.publish_tf = glue::TfMode::kOdom;
+  params.node.base_frame.clear();
   return params;
 }
 
@@ -171,8 +172,8 @@ nlohmann::ordered_json compareRun(const glue::RecordingSink& sink, const glue::I
   nlohmann::ordered_json j = {
       {"file", ref.path}, {"frame", ref.frame}, {"clock", ref.clock}, {"alignment", eval::toString(ref.alignment)}};
   if (sink.poses.empty()) {
-    std::printf("  against %s: no pose since the last reset (lost, not re-initialized)\n", ref.path.c_str());
-    j["error"] = "no pose since the last reset";
+    std::printf("  against %s: no pose (never initialized)\n", ref.path.c_str());
+    j["error"] = "no pose";
     return j;
   }
   try {
@@ -210,6 +211,29 @@ nlohmann::ordered_json compareRun(const glue::RecordingSink& sink, const glue::I
   return j;
 }
 
+/// The run's events (starts, resets and why), with the time of the pose before each.
+void writeEvents(const std::string& path, const glue::RecordingSink& sink) {
+  std::ofstream f(path);
+  f << "t,event\n" << std::setprecision(12);
+  for (const auto& e : sink.events) f << e.t << ",\"" << e.text << "\"\n";
+}
+
+/// The faults the processor met and rode through (or not), for the health report.
+nlohmann::ordered_json inputCounters(const glue::InputCounters& c) {
+  return {{"imu_nonfinite", c.imu_nonfinite},
+          {"imu_clipped", c.imu_clipped},
+          {"imu_implausible", c.imu_implausible},
+          {"imu_gaps", c.imu_gaps},
+          {"imu_stale", c.imu_stale},
+          {"images_stale", c.images_stale},
+          {"images_late", c.images_late},
+          {"images_queue_dropped", c.images_queue_dropped},
+          {"image_gaps", c.image_gaps},
+          {"images_without_features", c.images_without_features},
+          {"outlier_bursts", c.outlier_bursts},
+          {"divergences", c.divergences}};
+}
+
 /// One mechanization over the bag: its trajectory, trace, health (into *health) and, with ground
 /// truth, its metrics (into *results).
 void runOne(const Options& o, const std::string& mechanization, const glue::InputBagInfo& info,
@@ -225,9 +249,14 @@ void runOne(const Options& o, const std::string& mechanization, const glue::Inpu
   fs::create_directories(o.out);
   std::vector<eval::StampedPose> traj;
   for (const auto& p : sink.poses) traj.push_back({p.t, p.p, p.q, p.cov});
-  eval::writeTum(o.out + "/" + name + ".tum", traj,
-                 "t x y z qx qy qz qw (body in the filter's world frame, IMU clock)");
+  eval::writeTum(
+      o.out + "/" + name + ".tum", traj,
+      "t x y z qx qy qz qw (body in the continuous odom frame, IMU clock; resets in " + name + "_events.csv)");
+  writeEvents(o.out + "/" + name + "_events.csv", sink);
   nlohmann::ordered_json& h = health->runs.rows[name] = eval::runHealth(sink.trace, sink.resets, bag_s, wall);
+  h["output_s"] = sink.poses.size() > 1 ? sink.poses.back().t - sink.poses.front().t : 0.0;
+  h["input_s"] = bag_s;
+  h["inputs"] = inputCounters(processor.counters());
   eval::writeTrace(o.out + "/" + name + "_trace.csv", sink.trace);
   std::cout << eval::healthLine(name, h);
   for (size_t k = 0; k < refs.size(); ++k) {

@@ -36,6 +36,7 @@ void EkfSlam::reset() {
   last_seen_.clear();
   compositions_ = 0;
   imu_gaps_ = 0;
+  bridges_.clear();
   zero_velocity_updates_ = 0;
   stationary_.reset();
   divergence_.reset();
@@ -130,6 +131,27 @@ bool EkfSlam::addImu(const ImuData& imu) {
   return true;
 }
 
+void EkfSlam::bridgeImu(const ImuData& imu) {
+  if (imu_.empty() || !(imu.timestamp > imu_.back().timestamp)) return;
+  const ImuData& good = imu_.back();
+  bridges_.push_back(
+      {good.timestamp, imu.timestamp - good.timestamp, (imu.am - good.am).cwiseAbs(), (imu.wm - good.wm).cwiseAbs()});
+}
+
+void EkfSlam::addBridgeUncertainty(FilterState& s, double t_before, double fraction) const {
+  // What the left-out sample could have hidden: its departure from the last good sample, as an
+  // unknown acceleration and rate over its period (the velocity and attitude it could have moved).
+  using namespace idx;
+  for (const ImuBridge& b : bridges_) {
+    if (b.t_before != t_before) continue;
+    const int m = s.motionDim();
+    MotionMatrix Q = MotionMatrix::Zero(m, m);
+    Q.block<3, 3>(kV, kV).diagonal() = fraction * (b.sigma_a * b.dt).cwiseAbs2();
+    Q.block<3, 3>(kPsi, kPsi).diagonal() = fraction * (b.sigma_g * b.dt).cwiseAbs2();
+    s.propagateCovariance(MotionMatrix::Identity(m, m), Q);
+  }
+}
+
 double EkfSlam::latestImuTime() const {
   return imu_.empty() ? -std::numeric_limits<double>::infinity() : imu_.back().timestamp;
 }
@@ -139,6 +161,7 @@ bool EkfSlam::propagateTo(double t) {
   if (imu_.empty() || imu_.back().timestamp < t) return false;
   integrateImu(state_, t, &last_gyro_);
   while (imu_.size() > 1 && imu_[1].timestamp <= t) imu_.pop_front();
+  while (!bridges_.empty() && bridges_.front().t_before < imu_.front().timestamp) bridges_.pop_front();
   return true;
 }
 
@@ -162,6 +185,7 @@ void EkfSlam::integrateImu(FilterState& s, double t, Vec3* last_gyro) const {
       const double alpha = (0.5 * (t0 + t1) - a.timestamp) / (b.timestamp - a.timestamp);
       integrate(t0, t1, (1.0 - alpha) * a.wm + alpha * b.wm, (1.0 - alpha) * a.am + alpha * b.am);
       if (b.timestamp - a.timestamp > config_.max_imu_gap_s) addGapUncertainty(s, t1 - t0);
+      if (!bridges_.empty()) addBridgeUncertainty(s, a.timestamp, (t1 - t0) / (b.timestamp - a.timestamp));
     }
     if (b.timestamp >= t) break;
   }

@@ -63,6 +63,7 @@ std::string EkfSlamConfig::validate() const {
   checkRange(err, "composition_new_landmarks", composition_new_landmarks);
   checkRange(err, "landmark_timeout_s", landmark_timeout_s);
   checkRange(err, "max_imu_gap_s", max_imu_gap_s);
+  err << imu_check.validate();
   checkRange(err, "imu_gap_accel_sigma_mps2", imu_gap_accel_sigma_mps2);
   checkRange(err, "imu_gap_gyro_sigma_radps", imu_gap_gyro_sigma_radps);
   checkRange(err, "imu_buffer_max", imu_buffer_max);

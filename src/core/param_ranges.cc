@@ -54,6 +54,11 @@ const std::map<std::string, ParamRange>& table() {
       {"imu_gap_accel_sigma_mps2", {0.0, 100.0}},
       {"imu_gap_gyro_sigma_radps", {0.0, 10.0}},
       {"imu_buffer_max", {10, 1e7}},
+      {"imu_accel_range_mps2", {0.0, 10000.0}},
+      {"imu_gyro_range_radps", {0.0, 1000.0}},
+      {"imu_max_accel_step_mps2", {0.0, 10000.0}},
+      {"imu_max_gyro_step_radps", {0.0, 1000.0}},
+      {"imu_max_bridged_samples", {0, 100}},
       // initialization [s, m/s, rad, ratio, rad/s, m/s^2, count, m, px]
       {"dynamic_init_window_s", {0.2, 10.0}},
       {"dynamic_init_max_window_s", {0.2, 10.0}},

@@ -1,6 +1,7 @@
 #include "vi_ekf_slam/core/vio_pipeline.h"
 
 #include <chrono>
+#include <cmath>
 #include <sstream>
 #include <stdexcept>
 
@@ -74,6 +75,15 @@ void VioPipeline::addImu(const ImuData& imu) {
   // The rest test looks at every sample; the filter and the moving start only from the first
   // frame (or a start from a known state) on: a start before the camera runs would drift on the
   // IMU alone until then.
+  const bool finite = std::isfinite(imu.timestamp) && imu.wm.allFinite() && imu.am.allFinite();
+  if (finite) {
+    const ImuSampleVerdict v = imu_check_.check(imu, config_.imu_check);
+    if (v != ImuSampleVerdict::kGood) {
+      if (filter_ && (camera_running_ || filter_->initialized())) filter_->bridgeImu(imu);
+      listener_.imuBridged(imu, v);
+      return;
+    }
+  }
   if (auto r = static_init_.addImu(imu)) at_rest_ = r;
   if (!filter_ || (!camera_running_ && !filter_->initialized())) return;
   if (!filter_->initialized()) dynamic_init_->addImu(imu);

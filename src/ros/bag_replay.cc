@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <chrono>
+#include <cmath>
 #include <iostream>
 
 #include <cv_bridge/cv_bridge.h>
@@ -63,11 +64,10 @@ void RecordingSink::status(const vi_ekf_slam::FilterStatus& s) {
 }
 
 void RecordingSink::event(const std::string& text) {
-  events.push_back(text);
+  events.push_back({poses.empty() ? std::nan("") : poses.back().t, text});
   if (text.rfind("reset", 0) == 0) {
     ++resets;
-    poses.clear();  // a reset starts a new estimate frame: evaluate the last one
-    map.clear();
+    map.clear();  // the new filter maps anew
   }
 }
 

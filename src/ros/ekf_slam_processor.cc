@@ -30,7 +30,9 @@ std::pair<int, std::string> EkfSlamProcessor::inputsHealth() const {
     return {1, c.imu_received == 0 ? "no IMU received" : "no image received"};
   }
   if (c.images_bad_encoding > 0 || c.camera_info_invalid > 0 || c.images_no_camera > 0) return {2, last_problem_};
-  if (c.imu_nonfinite + c.imu_stale + c.imu_gaps + c.images_stale + c.images_late + c.images_queue_dropped > 0) {
+  if (c.imu_nonfinite + c.imu_stale + c.imu_gaps + c.imu_clipped + c.imu_implausible + c.images_stale + c.images_late +
+          c.images_queue_dropped >
+      0) {
     return {1, last_problem_};
   }
   return {0, "inputs ok"};
@@ -244,6 +246,19 @@ void EkfSlamProcessor::dropped(FrameDrop why) {
       reportProblem("image dropped: no IMU data past its stamp");
       break;
   }
+}
+
+void EkfSlamProcessor::imuBridged(const ImuData& imu, ImuSampleVerdict why) {
+  std::ostringstream w;
+  w.precision(3);
+  if (why == ImuSampleVerdict::kClipped) {
+    ++counters_.imu_clipped;
+    w << "IMU sample at " << std::fixed << imu.timestamp << " s clipped at the sensor's range: bridged";
+  } else {
+    ++counters_.imu_implausible;
+    w << "IMU sample at " << std::fixed << imu.timestamp << " s implausible next to the last: bridged";
+  }
+  reportProblem(w.str());
 }
 
 void EkfSlamProcessor::lost(const std::string& why) {

@@ -172,6 +172,8 @@ void EkfSlamRos::diagnoseInputs(diagnostic_updater::DiagnosticStatusWrapper& sta
   stat.add("imu dropped: non-finite", c.imu_nonfinite);
   stat.add("imu dropped: stale stamp", c.imu_stale);
   stat.add("imu gaps", c.imu_gaps);
+  stat.add("imu bridged: clipped at the range", c.imu_clipped);
+  stat.add("imu bridged: implausible", c.imu_implausible);
   stat.add("images received", c.images_received);
   stat.add("images processed", c.images_processed);
   stat.add("images dropped: bad encoding", c.images_bad_encoding);

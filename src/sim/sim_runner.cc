@@ -59,6 +59,8 @@ std::string toString(SensorFault::Kind kind) {
       return "outlier_burst";
     case SensorFault::Kind::kCameraCovered:
       return "camera_covered";
+    case SensorFault::Kind::kImuClipped:
+      return "imu_clipped";
   }
   return "unknown";
 }
@@ -192,6 +194,16 @@ bool SensorStream::next(Event* e) {
     imu_given_ = true;
     if (activeFault(sc_.faults, SensorFault::Kind::kImuGap, d.timestamp)) continue;
     e->imu = d;
+    if (const SensorFault* f = activeFault(sc_.faults, SensorFault::Kind::kImuClipped, d.timestamp)) {
+      // One sample a second at the sensor's range (an accelerometer and a gyro axis), as a bump does.
+      if (next_clip_t_ < f->start_s) next_clip_t_ = f->start_s;
+      if (d.timestamp >= next_clip_t_) {
+        const ImuCheckParams range;
+        e->imu->am.x() = std::copysign(range.accel_range_mps2, d.am.x());
+        e->imu->wm.z() = std::copysign(range.gyro_range_radps, d.wm.z());
+        next_clip_t_ += 1.0;
+      }
+    }
     e->imu->timestamp = stamp(d.timestamp);
     e->imu_index = k_ - 1;
     return true;

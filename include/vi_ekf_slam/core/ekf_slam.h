@@ -99,6 +99,11 @@ class EkfSlam {
   /// The probability of the next update's chi^2 gate (OutlierWatch).
   double gateProbability() const { return outlier_watch_.gateProbability(config_.update); }
   int imuGaps() const { return imu_gaps_; }
+  /// A sample not to be integrated as it is (clipped at the range or implausible, ImuSampleCheck):
+  /// the propagation interpolates its neighbours over it and the covariance grows by what it could
+  /// have hidden, its departure from the last good sample over its period. Later samples than the
+  /// last buffered one only.
+  void bridgeImu(const ImuData& imu);
   /// Zero-velocity updates applied since the start or the last reset (standing detected).
   int zeroVelocityUpdates() const { return zero_velocity_updates_; }
 
@@ -158,6 +163,14 @@ class EkfSlam {
   Vec3 last_gyro_ = Vec3::Zero();  ///< the angular rate [rad/s] (raw) of the last propagation step
   int compositions_ = 0;
   int imu_gaps_ = 0;
+  /// A left-out sample: after the buffered one at t_before, over dt, hiding up to sigma_a / sigma_g.
+  struct ImuBridge {
+    double t_before, dt;
+    Vec3 sigma_a, sigma_g;
+  };
+  std::deque<ImuBridge> bridges_;
+  /// The bridges' uncertainty for the piece of [a, b] integrated (fraction of it).
+  void addBridgeUncertainty(FilterState& s, double t_before, double fraction) const;
   int zero_velocity_updates_ = 0;
   StationaryDetector stationary_;
   DivergenceMonitor divergence_;

@@ -4,6 +4,7 @@
 #include <optional>
 #include <string>
 
+#include "vi_ekf_slam/core/imu_sample_check.h"
 #include "vi_ekf_slam/core/delayed_landmarks.h"
 #include "vi_ekf_slam/core/divergence_monitor.h"
 #include "vi_ekf_slam/core/ekf_update.h"
@@ -91,6 +92,7 @@ struct EkfSlamConfig {
   double imu_gap_accel_sigma_mps2 = 3.0;
   double imu_gap_gyro_sigma_radps = 0.3;
   int imu_buffer_max = 4000;         ///< bound on buffered IMU samples
+  ImuCheckParams imu_check;          ///< samples clipped at the range or implausible: bridged
   ZeroVelocityParams zero_velocity;  ///< standing detection from parallax + zero-velocity update
   InitialUncertainty initial;
   DivergenceParams divergence;  ///< when the filter counts as lost (FrameResult::lost)

@@ -14,6 +14,7 @@
 
 #include "vi_ekf_slam/core/dynamic_initializer.h"
 #include "vi_ekf_slam/core/ekf_slam.h"
+#include "vi_ekf_slam/core/imu_sample_check.h"
 #include "vi_ekf_slam/core/static_initializer.h"
 
 namespace vi_ekf_slam {
@@ -64,6 +65,8 @@ class PipelineListener {
   virtual void processed(const CameraFrame& /*frame*/, const FrameResult& /*r*/, EkfSlam& /*filter*/) {}
   /// The filter was lost (or its state became non-finite) and the pipeline started over.
   virtual void lost(const std::string& /*why*/) {}
+  /// An IMU sample was not integrated as it is (clipped at the range or implausible): bridged.
+  virtual void imuBridged(const ImuData& /*imu*/, ImuSampleVerdict /*why*/) {}
 };
 
 class VioPipeline {
@@ -85,7 +88,9 @@ class VioPipeline {
   bool setConfig(const EkfSlamConfig& config, std::string* error);
 
   /// One IMU sample: offered to the start policy and, once the first frame has arrived, buffered
-  /// for the filter; every queued frame it reaches is processed.
+  /// for the filter; every queued frame it reaches is processed. A sample clipped at the IMU's
+  /// range or implausible next to its neighbours (ImuSampleCheck) reaches neither: the filter
+  /// bridges it.
   void addImu(const ImuData& imu);
   /// One camera frame: before the start it goes to the dynamic initializer, after it to the queue.
   void addFrame(QueuedFrame frame);
@@ -128,6 +133,7 @@ class VioPipeline {
   PipelineParams params_;
   PipelineListener& listener_;
   std::unique_ptr<EkfSlam> filter_;
+  ImuSampleCheck imu_check_;
   StaticInitializer static_init_;
   std::optional<StaticInitResult> at_rest_;
   std::unique_ptr<DynamicInitializer> dynamic_init_;

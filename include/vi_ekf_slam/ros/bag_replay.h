@@ -17,13 +17,17 @@
 
 namespace vi_ekf_slam::glue {
 
-/// Keeps what the processor outputs. A reset starts a new estimate frame (the filter's world, as
-/// the runner asks for): the poses and the map of the last one are kept.
+/// Keeps what the processor outputs: every pose (in the continuous odom frame the runner asks for,
+/// across resets), the map since the last reset, the events with the time of the pose before them.
 class RecordingSink : public OutputSink {
  public:
+  struct Event {
+    double t = 0.0;  ///< of the last pose before it (NaN before any) [s]
+    std::string text;
+  };
   std::vector<eval::EstimatedPose> poses;
   std::map<std::int64_t, eval::EstimatedLandmark> map;
-  std::vector<std::string> events;
+  std::vector<Event> events;
   std::vector<eval::StatusSample> trace;  ///< every processed image, across resets
   int resets = 0;
 

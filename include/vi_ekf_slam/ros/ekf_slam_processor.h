@@ -35,6 +35,7 @@ namespace vi_ekf_slam::glue {
 /// Counters shown in the diagnostics (and used by the tests).
 struct InputCounters {
   long imu_received = 0, imu_nonfinite = 0, imu_stale = 0, imu_gaps = 0;
+  long imu_clipped = 0, imu_implausible = 0;  ///< samples bridged (ImuSampleCheck)
   long images_received = 0, images_processed = 0, images_bad_encoding = 0, images_stale = 0;
   long images_late = 0, images_before_init = 0, images_no_camera = 0, images_queue_dropped = 0;
   long camera_info_invalid = 0, rejected_observations = 0, resets = 0;
@@ -139,6 +140,7 @@ class EkfSlamProcessor : private PipelineListener {
   void dropped(FrameDrop why) override;
   void processed(const CameraFrame& frame, const FrameResult& r, EkfSlam& filter) override;
   void lost(const std::string& why) override;
+  void imuBridged(const ImuData& imu, ImuSampleVerdict why) override;
 
   NodeParams params_;
   OutputSink& sink_;

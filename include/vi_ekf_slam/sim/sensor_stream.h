@@ -36,9 +36,10 @@ class SensorStream {
   const ImuSequence* imu_;
   TrackingCamera camera_;
   double t0_, cam_dt_, last_frame_t_;
-  size_t k_ = 0;            ///< next IMU sample
-  int next_frame_ = 1;      ///< next camera frame (index from t0)
-  bool imu_given_ = false;  ///< sample k_ - 1 was handed out; its frames follow
+  size_t k_ = 0;                 ///< next IMU sample
+  int next_frame_ = 1;           ///< next camera frame (index from t0)
+  bool imu_given_ = false;       ///< sample k_ - 1 was handed out; its frames follow
+  double next_clip_t_ = -1e300;  ///< the next sample a kImuClipped fault clips at or after [s]
 };
 
 }  // namespace vi_ekf_slam::sim

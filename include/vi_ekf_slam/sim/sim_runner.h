@@ -28,6 +28,7 @@ struct SensorFault {
     kImuGap,         ///< no IMU sample reaches the filter
     kOutlierBurst,   ///< `outlier_fraction` of the tracks jump 20-60 px (mistracked features)
     kCameraCovered,  ///< images arrive without any feature
+    kImuClipped,     ///< one IMU sample a second clipped at the range of ImuCheckParams (a bump)
   };
   Kind kind = Kind::kImageDropout;
   double start_s = 0.0;

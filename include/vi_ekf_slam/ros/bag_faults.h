@@ -1,0 +1,50 @@
+// Faulty copies of a bag, one fault class at a time, with its size as a parameter: what a first
+// responder's rig meets (an IMU clipping at its range when bumped, a stalled cable or driver, a
+// glove over the lens, corrupt samples, dim light, a lossy link). vi_ekf_slam_perturb_bag writes
+// them; `make faults` runs the node's processor over each (docs/evaluation.md).
+#pragma once
+
+#include <cstdint>
+#include <optional>
+#include <string>
+#include <vector>
+
+namespace vi_ekf_slam::glue {
+
+enum class FaultClass {
+  kClippedImu,   ///< isolated IMU samples at the sensor's range, one every `size` s
+  kSensorGaps,   ///< three IMU gaps of `size` s, two image gaps of 6 x `size` s
+  kCoveredLens,  ///< black images for `size` s
+  kNanImu,       ///< an IMU sample of NaN every `size` s
+  kDimImages,    ///< `size` s of dim, noisy images (a fifth of the light, noise of 8 grey levels)
+  kLossyLink,    ///< each image dropped with probability `size`, duplicated with `size` / 2, late by up to 30 ms
+};
+
+std::optional<FaultClass> faultClassFromString(const std::string& s);
+std::string toString(FaultClass c);
+std::vector<FaultClass> allFaultClasses();
+/// The size of a class as the tests and `make faults` use it by default (at least the sizes that
+/// reset the filter on the real recording before these faults were handled).
+double defaultFaultSize(FaultClass c);
+
+struct FaultPlan {
+  FaultClass fault = FaultClass::kClippedImu;
+  double size = 0.0;  ///< see FaultClass [s, or a probability]
+  std::uint64_t seed = 1;
+  double accel_range_mps2 = 16.0 * 9.80665;                     ///< the clipped value of an accelerometer axis
+  double gyro_range_radps = 2000.0 * 3.14159265358979 / 180.0;  ///< of a gyro axis
+};
+
+/// What the copy holds that the original did not.
+struct FaultCounts {
+  int imu_clipped = 0, imu_dropped = 0, imu_nan = 0;
+  int images_dropped = 0, images_black = 0, images_dim = 0, images_duplicated = 0, images_late = 0;
+  std::vector<std::pair<double, double>> intervals;  ///< the faults' [start, end] in bag time [s]
+};
+
+/// Writes `out`, a copy of `in` with the fault applied to its IMU and image topics (chosen as
+/// run_bag chooses them; raw or compressed images, written raw where their pixels change). Throws
+/// std::runtime_error when the bag cannot be read or written.
+FaultCounts perturbBag(const std::string& in, const std::string& out, const FaultPlan& plan);
+
+}  // namespace vi_ekf_slam::glue
