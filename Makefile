@@ -202,7 +202,7 @@ realdata: build $(REAL_BAG)
 # images, a lossy link), each through the node's processor; one table (results/faults/faults.md).
 faults: build $(REAL_BAG) $(BAG)
 	source $(DEVEL)/setup.bash && python3 tools/fault_matrix.py --bin $(BIN) --out results/faults \
-	  --bag real=$(REAL_BAG):$(REAL)/reference/sfm_camera_poses.txt --bag rendered=$(BAG)
+	  --bag real=$(REAL_BAG):$(REAL)/reference/sfm_camera_poses.txt --bag rendered=$(BAG) --study
 
 # Endurance: a 30-minute walk (laps) per mechanization through the core; error, map size and
 # resident memory over time (a 4-minute version runs in make test).

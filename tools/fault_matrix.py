@@ -6,7 +6,11 @@ against the reference (Sim(3) RMSE against a TUM reference, or the ATE against t
 truth), with its ratio to the clean run's. Writes OUT/faults.json and OUT/faults.md (the report
 schema of tools/report.py) and prints the table.
 
+With --study, also the study on the built-in walk (8 runs, the default configuration) clean and with
+each of the simulator's faults: ATE, run-averaged pose NEES and its band.
+
 usage: fault_matrix.py --bin DIR --bag NAME=BAG[:REFERENCE.tum] [--bag ...] [--out DIR] [--classes a,b|all]
+                       [--study]
 """
 import argparse
 import json
@@ -18,6 +22,29 @@ import report
 
 MECH = "sensor_centric_composition"
 CLASSES = ["clipped_imu", "sensor_gaps", "covered_lens", "nan_imu", "dim_images", "lossy_link"]
+# The simulator's faults in the study (KIND:START_S:DURATION_S on the 37 s built-in walk).
+STUDY_FAULTS = {"clean": [], "imu_clipped": ["imu_clipped:8:8"], "imu_gap": ["imu_gap:12:0.5"],
+                "image_dropout": ["image_dropout:12:2"], "camera_covered": ["camera_covered:12:3"],
+                "outlier_burst": ["outlier_burst:12:1"]}
+
+
+def study_rows(bin_dir, out):
+    """The study clean and with each simulated fault: {name: row}."""
+    rows = {}
+    for name, faults in STUDY_FAULTS.items():
+        o = os.path.join(out, "study", name)
+        cmd = [os.path.join(bin_dir, "vi_ekf_slam_study"), "--trajectory", "builtin", "--runs", "8", "--seed", "1",
+               "--configs", "default", "--out", o] + [x for f in faults for x in ("--fault", f)]
+        subprocess.run(cmd, check=True, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+        r = report.load(os.path.join(o, "summary.json"))
+        d, band = r["runs"]["default"], r["config"]["pose_nees_band"]
+        rows["study / " + name] = {"fault": name, "ate_m": d["ate_position_m"], "nees_pose": d["nees_pose"],
+                                   "band_lo": band[0], "band_hi": band[1],
+                                   "inside_band": band[0] <= d["nees_pose"] <= band[1],
+                                   "consistent_fraction": d["consistent_fraction"]}
+        print("study / %-20s ATE %.3f m, NEES pose %.2f (band [%.2f, %.2f])" % (
+            name, d["ate_position_m"], d["nees_pose"], band[0], band[1]), flush=True)
+    return rows
 
 
 def run(bin_dir, bag, ref, out):
@@ -46,6 +73,7 @@ def main():
     ap.add_argument("--out", default="results/faults")
     ap.add_argument("--classes", default="all")
     ap.add_argument("--keep-bags", action="store_true", help="keep the faulty copies (they are as large as the bag)")
+    ap.add_argument("--study", action="store_true", help="also the study with the simulator's faults")
     a = ap.parse_args()
     classes = CLASSES if a.classes == "all" else a.classes.split(",")
     rows = {}
@@ -78,13 +106,18 @@ def main():
             print("%-28s resets %d, output %.1f of %.1f s, error %s m" % (
                 name + " / " + fault, r["resets"], r["output_s"], r["input_s"],
                 "%.3f" % error if error is not None else "-"), flush=True)
+    tables = {"study": study_rows(a.bin, a.out)} if a.study else None
     r = report.report("faults", "Faults: one class at a time through the node's processor (%s)" % MECH,
-                      {"mechanization": MECH, "classes": ",".join(classes)}, rows)
+                      {"mechanization": MECH, "classes": ",".join(classes)}, rows, tables)
     text = report.write_report(a.out, "faults", r, columns=[
         ("resets", "resets", 0), ("output_s", "output [s]", 1), ("input_s", "input [s]", 1),
         ("error_m", "error [m]", 3), ("error_over_clean", "x clean", 2), ("imu_bridged", "IMU bridged", 0),
         ("imu_dropped_nonfinite", "IMU non-finite", 0), ("imu_gaps", "IMU gaps", 0), ("image_gaps", "image gaps", 0),
         ("images_without_features", "images w/o features", 0)],
+        table_columns={"study": [("ate_m", "ATE [m]", 3), ("nees_pose", "NEES pose", 2), ("band_lo", "band from", 2),
+                                 ("band_hi", "to", 2), ("inside_band", "inside", 0),
+                                 ("consistent_fraction", "consistent", 2)]},
+        headings={"study": "The study on the built-in walk (8 runs, default configuration) with the simulator's faults"},
         notes=["error: Sim(3) RMSE against the reference, or the ATE against the bag's ground truth; the whole run "
                "in the continuous odom frame."])
     print()

@@ -46,6 +46,7 @@ namespace fs = std::filesystem;
 namespace {
 
 struct Options {
+  std::vector<std::string> faults;  // KIND:START_S:DURATION_S
   std::string trajectory = "builtin";
   int runs = 50;
   std::uint64_t seed = 1;
@@ -135,6 +136,9 @@ Options parse(int argc, char** argv) {
       "landmark-entry", po::value(&o.landmark_entry),
       "triangulated | prior: new inverse-depth tracks wait for the baseline that triangulates them, or enter at the "
       "prior depth at once (default: the core's)")(
+      "fault", po::value(&o.faults)->composing(),
+      "KIND:START_S:DURATION_S, repeatable: a sensor fault in every run (image_dropout, imu_gap, outlier_burst, "
+      "camera_covered, imu_clipped)")(
       "imu-biases", po::value(&o.imu_biases)->default_value(o.imu_biases),
       "drawn | none: the simulated IMU's biases are drawn from the filter's prior, or zero (a diagnostic: what "
       "not knowing them costs; the filter keeps its prior)");
@@ -391,6 +395,28 @@ std::string configSets(const std::string& name, size_t index) {
   return sets.empty() ? "-" : sets;
 }
 
+/// --fault KIND:START_S:DURATION_S (exits with usage on a malformed one).
+std::vector<sim::SensorFault> parseFaults(const std::vector<std::string>& specs) {
+  std::vector<sim::SensorFault> faults;
+  for (const std::string& f : specs) {
+    const auto a = f.find(':'), b = f.rfind(':');
+    sim::SensorFault fault;
+    const auto kind = sim::sensorFaultKindFromString(f.substr(0, a));
+    char* end = nullptr;
+    if (a != std::string::npos && b > a) {
+      fault.start_s = std::strtod(f.c_str() + a + 1, &end);
+      if (end == f.c_str() + b) fault.duration_s = std::strtod(f.c_str() + b + 1, &end);
+    }
+    if (!kind || a == std::string::npos || b == a || !end || *end != '\0' || !(fault.duration_s > 0.0) ||
+        !(fault.start_s >= 0.0)) {
+      usage("--fault takes KIND:START_S:DURATION_S (got '" + f + "')");
+    }
+    fault.kind = *kind;
+    faults.push_back(fault);
+  }
+  return faults;
+}
+
 /// The scenario the options describe, with *name for the reports (exits with usage on a bad
 /// combination; throws when a file cannot be read).
 sim::Scenario loadScenario(const Options& o, std::string* name) {
@@ -413,6 +439,7 @@ sim::Scenario loadScenario(const Options& o, std::string* name) {
   if (!o.init.empty()) sc.start_at_truth = o.init == "truth";
   if (o.init == "dynamic") sc.dynamic_init = DynamicInitParams();
   sc.draw_imu_biases = o.imu_biases == "drawn";
+  sc.faults = parseFaults(o.faults);
   return sc;
 }
 
@@ -486,6 +513,7 @@ eval::Report summaryReport(const Options& o, const std::string& traj_name, const
               {"seed", o.seed},
               {"runs", o.runs},
               {"recorded_imu", o.imu},
+              {"faults", o.faults},
               {"start", sc.dynamic_init     ? "dynamic"
                         : sc.start_at_truth ? "truth"
                                             : "prior"},

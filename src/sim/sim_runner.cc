@@ -65,6 +65,14 @@ std::string toString(SensorFault::Kind kind) {
   return "unknown";
 }
 
+std::optional<SensorFault::Kind> sensorFaultKindFromString(const std::string& s) {
+  for (auto k : {SensorFault::Kind::kImageDropout, SensorFault::Kind::kImuGap, SensorFault::Kind::kOutlierBurst,
+                 SensorFault::Kind::kCameraCovered, SensorFault::Kind::kImuClipped}) {
+    if (toString(k) == s) return k;
+  }
+  return std::nullopt;
+}
+
 const SensorFault* activeFault(const std::vector<SensorFault>& faults, SensorFault::Kind kind, double t) {
   for (const auto& f : faults) {
     if (f.kind == kind && f.covers(t)) return &f;

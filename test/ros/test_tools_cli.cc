@@ -13,6 +13,8 @@
 #include <opencv2/imgcodecs.hpp>
 
 #include "vi_ekf_slam/core/ekf_slam_config.h"
+#include "vi_ekf_slam/core/imu_sample_check.h"
+#include "vi_ekf_slam/ros/bag_faults.h"
 
 #include <algorithm>
 #include <array>
@@ -54,6 +56,9 @@ const Tool kTools[] = {
     {VI_TOOL_RUN_FEATURES, "--gate high"},
     {VI_TOOL_STUDY, "--runs many"},
     {VI_TOOL_SOAK, "--minutes half"},
+    {VI_TOOL_RUN_BAG, "--bag /tmp/x.bag --reference-from-s"},
+    {VI_TOOL_MAKE_WALKS, "--out /tmp/walks --bogus"},
+    {VI_TOOL_PERTURB_BAG, "--bag /tmp/x.bag --out /tmp/y.bag --fault clipped_imu --size big"},
 };
 
 }  // namespace
@@ -298,4 +303,71 @@ TEST(ToolsCli, RunBagFindsItsDefaultsThroughThePackageNotTheSourceTree) {
                         " --bag /nonexistent.bag");
   EXPECT_EQ(o.code, 2) << o.output;
   EXPECT_NE(o.output.find("ROS_PACKAGE_PATH"), std::string::npos) << o.output;
+}
+
+namespace {
+/// Per topic: messages, IMU samples with a NaN, IMU samples at the default range, black images.
+struct BagCounts {
+  int imu = 0, images = 0, imu_nan = 0, imu_at_range = 0, black = 0;
+};
+BagCounts countBag(const std::string& path) {
+  BagCounts c;
+  const vi_ekf_slam::ImuCheckParams range;
+  rosbag::Bag bag(path, rosbag::bagmode::Read);
+  for (const rosbag::MessageInstance& m : rosbag::View(bag)) {
+    if (auto imu = m.instantiate<sensor_msgs::Imu>()) {
+      ++c.imu;
+      const double a[] = {imu->linear_acceleration.x, imu->linear_acceleration.y, imu->linear_acceleration.z};
+      bool nan = false, at_range = false;
+      for (double v : a) {
+        nan = nan || std::isnan(v);
+        at_range = at_range || std::abs(v) >= range.accel_range_mps2;
+      }
+      c.imu_nan += nan;
+      c.imu_at_range += at_range;
+    } else if (auto img = m.instantiate<sensor_msgs::Image>()) {
+      ++c.images;
+      c.black += std::all_of(img->data.begin(), img->data.end(), [](uint8_t v) { return v == 0; });
+    }
+  }
+  return c;
+}
+}  // namespace
+
+// vi_ekf_slam_perturb_bag: each fault class as its size says, on a short rendered bag; the rest
+// of the bag as it was.
+TEST(ToolsCli, PerturbBagWritesEachFaultClassAsItsSizeSays) {
+  const std::string dir = "/tmp/vi_ekf_slam_perturb";
+  ASSERT_EQ(run("rm -rf " + dir + " && mkdir -p " + dir).code, 0);
+  ASSERT_EQ(run(std::string(VI_TOOL_MAKE_BAG) + " --out " + dir + "/in.bag --duration 9 --standing 1").code, 0);
+  const BagCounts clean = countBag(dir + "/in.bag");
+  ASSERT_GT(clean.images, 200);
+  auto perturbed = [&](const std::string& fault, double size) {
+    vi_ekf_slam::glue::FaultPlan plan;
+    plan.fault = *vi_ekf_slam::glue::faultClassFromString(fault);
+    plan.size = size;
+    vi_ekf_slam::glue::perturbBag(dir + "/in.bag", dir + "/" + fault + ".bag", plan);
+    return countBag(dir + "/" + fault + ".bag");
+  };
+  // One clipped sample every 2 s of the 8.5 s between 10% and 95% of the 10 s bag: 4 or 5.
+  const BagCounts clipped = perturbed("clipped_imu", 2.0);
+  EXPECT_GE(clipped.imu_at_range, 4);
+  EXPECT_LE(clipped.imu_at_range, 5);
+  EXPECT_EQ(clipped.imu, clean.imu);
+  const BagCounts gaps = perturbed("sensor_gaps", 0.2);  // 3 x 0.2 s of IMU, 2 x 1.2 s of images
+  EXPECT_NEAR(clean.imu - gaps.imu, 3 * 0.2 * 200, 6);
+  EXPECT_NEAR(clean.images - gaps.images, 2 * 1.2 * 28, 4);
+  const BagCounts covered = perturbed("covered_lens", 1.0);
+  EXPECT_NEAR(covered.black, 28, 2);
+  EXPECT_EQ(covered.images, clean.images);
+  const BagCounts nan = perturbed("nan_imu", 3.0);
+  EXPECT_GE(nan.imu_nan, 2);
+  const BagCounts lossy = perturbed("lossy_link", 0.2);
+  EXPECT_LT(lossy.images, clean.images * 1.0);
+  EXPECT_GT(lossy.images, clean.images * 0.7);
+  // The tool refuses what it does not know.
+  const Outcome unknown =
+      run(std::string(VI_TOOL_PERTURB_BAG) + " --bag " + dir + "/in.bag --out " + dir + "/x.bag --fault glove");
+  EXPECT_EQ(unknown.code, 2) << unknown.output;
+  EXPECT_NE(unknown.output.find("covered_lens"), std::string::npos) << unknown.output;
 }

@@ -37,6 +37,8 @@ struct SensorFault {
   bool covers(double t) const { return t >= start_s && t < start_s + duration_s; }
 };
 std::string toString(SensorFault::Kind kind);
+/// The kind named by toString(), or nothing.
+std::optional<SensorFault::Kind> sensorFaultKindFromString(const std::string& s);
 /// The fault of this kind active at time t, or nullptr.
 const SensorFault* activeFault(const std::vector<SensorFault>& faults, SensorFault::Kind kind, double t);
 
