@@ -59,6 +59,7 @@ struct Options {
   std::string bag, out, config, rig, mechanization;
   std::optional<std::string> imu_topic, image_topic, camera_info_topic;
   bool plots = true;
+  bool segments = false;  ///< also each segment in the filter's own world
   std::vector<std::string> references, reference_alignment, reference_frame, reference_clock, reference_from_s;
   std::vector<std::string> recorded;  ///< NAME=BAG
   std::vector<std::string> params;    ///< name=value
@@ -84,6 +85,8 @@ void parseArguments(int argc, char** argv, Options* o) {
       "image-topic", po::value(&image), "sensor_msgs/Image or CompressedImage topic (default: the bag's one)")(
       "camera-info-topic", po::value(&info), "sensor_msgs/CameraInfo topic (default: the bag's one, if any)")(
       "no-plots", po::bool_switch(&no_plots), "skip the plots of plot_run.py")(
+      "segments", po::bool_switch(&o->segments),
+      "also <run>_segment_<k>.tum: the poses after the k-th reset in the filter's own world")(
       "reference", po::value(&o->references)->composing(), "a TUM trajectory to compare with (repeatable)")(
       "reference-alignment", po::value(&o->reference_alignment)->composing(),
       "sim3 | se3 | posyaw: once for all references or once per reference (default sim3)")(
@@ -244,6 +247,7 @@ void runOne(const Options& o, const std::string& mechanization, const glue::Inpu
   glue::RecordingSink sink;
   tf2::BufferCore tf;
   glue::EkfSlamProcessor processor(params, sink, &tf);
+  if (o.segments) sink.processor = &processor;
   const double wall = glue::replayBag(o.bag, topics, processor, tf);
   const double bag_s = info.end - info.start;
   fs::create_directories(o.out);
@@ -253,6 +257,10 @@ void runOne(const Options& o, const std::string& mechanization, const glue::Inpu
       o.out + "/" + name + ".tum", traj,
       "t x y z qx qy qz qw (body in the continuous odom frame, IMU clock; resets in " + name + "_events.csv)");
   writeEvents(o.out + "/" + name + "_events.csv", sink);
+  for (size_t k = 0; k < sink.segments.size(); ++k) {
+    eval::writeTum(o.out + "/" + name + "_segment_" + std::to_string(k) + ".tum", sink.segments[k],
+                   "t x y z qx qy qz qw (body in the filter's world after reset " + std::to_string(k) + ", IMU clock)");
+  }
   nlohmann::ordered_json& h = health->runs.rows[name] = eval::runHealth(sink.trace, sink.resets, bag_s, wall);
   h["output_s"] = sink.poses.size() > 1 ? sink.poses.back().t - sink.poses.front().t : 0.0;
   h["input_s"] = bag_s;

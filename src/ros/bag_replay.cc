@@ -26,6 +26,12 @@ void RecordingSink::odometry(const nav_msgs::Odometry& o) {
   for (int i = 0; i < 6; ++i)
     for (int j = 0; j < 6; ++j) p.cov(i, j) = o.pose.covariance[static_cast<size_t>(6 * i + j)];
   poses.push_back(p);
+  if (processor) {
+    const Eigen::Isometry3d T_w_o = processor->outputFrames().fixedFromWorld().inverse();
+    if (static_cast<int>(segments.size()) <= resets) segments.resize(static_cast<size_t>(resets) + 1);
+    segments[static_cast<size_t>(resets)].push_back(
+        {p.t, T_w_o * p.p, Quat(T_w_o.rotation() * p.q.toRotationMatrix()).normalized(), std::nullopt});
+  }
 }
 
 void RecordingSink::landmarks(const std::vector<LandmarkOutput>& lms, const ros::Time&) {

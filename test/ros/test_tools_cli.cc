@@ -10,6 +10,7 @@
 #include <nlohmann/json.hpp>
 #include <sys/wait.h>
 
+#include <Eigen/Core>
 #include <opencv2/imgcodecs.hpp>
 
 #include "vi_ekf_slam/core/ekf_slam_config.h"
@@ -370,4 +371,58 @@ TEST(ToolsCli, PerturbBagWritesEachFaultClassAsItsSizeSays) {
       run(std::string(VI_TOOL_PERTURB_BAG) + " --bag " + dir + "/in.bag --out " + dir + "/x.bag --fault glove");
   EXPECT_EQ(unknown.code, 2) << unknown.output;
   EXPECT_NE(unknown.output.find("covered_lens"), std::string::npos) << unknown.output;
+}
+
+// run_bag keeps the whole run: a filter told that walking speed is implausible (lost above
+// 0.5 m/s over 0.5 s) is lost again and again on the rendered walk; the trajectory file still
+// covers the walk from the first start to the end, continuous across each reset (the odom frame),
+// the resets are in <run>_events.csv and counted in health.json, and --segments writes each
+// stretch in the filter's own world.
+TEST(ToolsCli, RunBagWritesTheWholeRunAcrossResets) {
+  const std::string dir = "/tmp/vi_ekf_slam_run_bag_resets";
+  ASSERT_EQ(run("rm -rf " + dir + " && mkdir -p " + dir).code, 0);
+  ASSERT_EQ(run(std::string(VI_TOOL_MAKE_BAG) + " --out " + dir + "/walk.bag --duration 10 --standing 1").code, 0);
+  const Outcome o =
+      run(std::string(VI_TOOL_RUN_BAG) + " --bag " + dir + "/walk.bag --out " + dir +
+          "/out --no-plots --segments --mechanization sensor_centric_composition --param lost_max_speed_mps=0.5 "
+          "--param lost_window_s=0.5");
+  ASSERT_EQ(o.code, 0) << o.output;
+  const nlohmann::json h =
+      nlohmann::json::parse(std::ifstream(dir + "/out/health.json"))["runs"]["sensor_centric_composition"];
+  const int resets = h["resets"];
+  EXPECT_GE(resets, 2) << h.dump();
+  EXPECT_EQ(h["inputs"]["divergences"], resets);
+  std::ifstream events(dir + "/out/sensor_centric_composition_events.csv");
+  int reset_lines = 0, starts = 0;
+  for (std::string line; std::getline(events, line);) {
+    reset_lines += line.find("\"reset: lost") != std::string::npos;
+    starts += line.find("\"initialized") != std::string::npos;
+  }
+  EXPECT_EQ(reset_lines, resets);
+  EXPECT_GE(starts, 2);
+  // The whole walk after the first start (1 s standing), continuous: no jump between poses beyond
+  // what 2 m/s would move in the time between them, across every restart.
+  std::ifstream tum(dir + "/out/sensor_centric_composition.tum");
+  double t_first = -1.0, t_last = 0.0, largest_speed = 0.0;
+  Eigen::Vector3d last = Eigen::Vector3d::Zero();
+  for (std::string line; std::getline(tum, line);) {
+    if (line.empty() || line[0] == '#') continue;
+    std::stringstream ss(line);
+    double t;
+    Eigen::Vector3d p;
+    ss >> t >> p.x() >> p.y() >> p.z();
+    if (t_first >= 0.0 && t > t_last) largest_speed = std::max(largest_speed, (p - last).norm() / (t - t_last));
+    if (t_first < 0.0) t_first = t;
+    t_last = t;
+    last = p;
+  }
+  EXPECT_GT(t_last - t_first, 9.0);
+  EXPECT_LT(largest_speed, 2.0);
+  EXPECT_NEAR(h["output_s"].get<double>(), t_last - t_first, 1e-6);
+  // One stretch per start (in the filter's own world, which starts over at each).
+  int segments = 0;
+  while (std::ifstream(dir + "/out/sensor_centric_composition_segment_" + std::to_string(segments) + ".tum").good())
+    ++segments;
+  EXPECT_GE(segments, starts - 1);
+  EXPECT_GE(segments, 2);
 }

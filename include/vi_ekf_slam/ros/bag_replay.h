@@ -30,6 +30,10 @@ class RecordingSink : public OutputSink {
   std::vector<Event> events;
   std::vector<eval::StatusSample> trace;  ///< every processed image, across resets
   int resets = 0;
+  /// If set, each pose is also kept in the filter's own world of the time (which starts over at
+  /// every reset): `segments[k]` holds the poses after the k-th reset.
+  const EkfSlamProcessor* processor = nullptr;
+  std::vector<std::vector<eval::StampedPose>> segments;
 
   void odometry(const nav_msgs::Odometry& o) override;
   void landmarks(const std::vector<LandmarkOutput>& lms, const ros::Time&) override;
