@@ -254,6 +254,7 @@ std::optional<DynamicInitResult> DynamicInitializer::alignSpan(double span_s, st
                  std::to_string(tracks.size()) + " of " + std::to_string(params_.min_features) + ")"});
   }
   std::vector<double> stamps;
+  stamps.reserve(window.size());
   for (const auto* f : window) stamps.push_back(f->timestamp);
   alignment::AlignmentProblem problem(imu_, std::move(stamps), std::move(tracks), camera_, T_b_c_,
                                       problemSettings(params_));

@@ -145,13 +145,14 @@ void VioPipeline::tryDynamic(QueuedFrame& frame) {
     return;
   }
   if (attempt_) return;  // the frame waits in the initializer's window for the next attempt
-  attempt_.emplace();
-  attempt_->frame_t = frame.t;
-  attempt_->outcome = std::async(std::launch::async, [init = *dynamic_init_]() mutable {
+  StartAttempt attempt;
+  attempt.frame_t = frame.t;
+  attempt.outcome = std::async(std::launch::async, [init = *dynamic_init_]() mutable {
     std::string why;
     std::optional<DynamicInitResult> r = init.tryInitialize(&why);
     return std::make_pair(std::move(r), why);
   });
+  attempt_ = std::move(attempt);
 }
 
 bool VioPipeline::takeFinishedAttempt() {
