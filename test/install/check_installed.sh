@@ -39,7 +39,7 @@ for trace in run_bag launch; do
 done
 grep -q '"config": "'"$prefix"'/share/vi_ekf_slam/config/vi_ekf_slam.yaml"' "$tmp/offline/health.json" ||
   { echo "check_installed: run_bag did not use the installed configuration"; cat "$tmp/offline/health.json"; fail=1; }
-images=$(python3 -c "import json; print(json.load(open('$tmp/offline/health.json'))['sensor_centric_composition']['images'])")
+images=$(python3 -c "import json; print(json.load(open('$tmp/offline/health.json'))['runs']['sensor_centric_composition']['images'])")
 [ "$images" -gt 20 ] || { echo "check_installed: run_bag processed $images images"; fail=1; }
 [ -f "$tmp/offline/topview.png" ] || { echo "check_installed: run_bag wrote no plots"; cat "$tmp/run_bag.log"; fail=1; }
 run_installed "rosbag info -y -k topics live.bag" > "$tmp/live_topics.txt"
