@@ -50,7 +50,7 @@ void DynamicInitializer::reset() {
 }
 
 void DynamicInitializer::addImu(const ImuData& imu) {
-  if (!std::isfinite(imu.timestamp) || !imu.wm.allFinite() || !imu.am.allFinite()) return;
+  if (!isFinite(imu)) return;
   if (!imu_.empty() && imu.timestamp <= imu_.back().timestamp) return;
   imu_.push_back(imu);
   // Keep what the window can need (frames wait for the IMU to pass them).

@@ -27,7 +27,7 @@ Quat gravityAlignedAttitude(const Vec3& f_b) {
 StaticInitializer::StaticInitializer(const StaticInitParams& params) : params_(params) {}
 
 std::optional<StaticInitResult> StaticInitializer::addImu(const ImuData& imu) {
-  if (!imu.am.allFinite() || !imu.wm.allFinite() || !std::isfinite(imu.timestamp)) return std::nullopt;
+  if (!isFinite(imu)) return std::nullopt;
   if (!window_.empty() && imu.timestamp <= window_.back().timestamp) return std::nullopt;
   window_.push_back(imu);
   while (window_.size() > 2 && window_.back().timestamp - window_[1].timestamp >= params_.window_s) {

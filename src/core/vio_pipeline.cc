@@ -75,8 +75,7 @@ void VioPipeline::addImu(const ImuData& imu) {
   // The rest test looks at every sample; the filter and the moving start only from the first
   // frame (or a start from a known state) on: a start before the camera runs would drift on the
   // IMU alone until then.
-  const bool finite = std::isfinite(imu.timestamp) && imu.wm.allFinite() && imu.am.allFinite();
-  if (finite) {
+  if (isFinite(imu)) {
     const ImuSampleVerdict v = imu_check_.check(imu, config_.imu_check);
     if (v != ImuSampleVerdict::kGood) {
       if (filter_ && (camera_running_ || filter_->initialized())) filter_->bridgeImu(imu);

@@ -21,7 +21,7 @@ std::optional<ImuData> fromImuMsg(const sensor_msgs::Imu& m) {
   d.timestamp = m.header.stamp.toSec();
   d.wm = Eigen::Vector3d(m.angular_velocity.x, m.angular_velocity.y, m.angular_velocity.z);
   d.am = Eigen::Vector3d(m.linear_acceleration.x, m.linear_acceleration.y, m.linear_acceleration.z);
-  if (!d.wm.allFinite() || !d.am.allFinite() || !std::isfinite(d.timestamp)) return std::nullopt;
+  if (!isFinite(d)) return std::nullopt;
   return d;
 }
 

@@ -3,6 +3,7 @@
 #pragma once
 
 #include <Eigen/Core>
+#include <cmath>
 #include <cstdint>
 #include <vector>
 
@@ -14,6 +15,8 @@ struct ImuData {
   Eigen::Vector3d wm = Eigen::Vector3d::Zero();  ///< measured angular rate [rad/s], eq. (6)
   Eigen::Vector3d am = Eigen::Vector3d::Zero();  ///< measured specific force [m/s^2], eq. (5)
 };
+/// A sample whose stamp and readings are all finite (the others are refused everywhere).
+inline bool isFinite(const ImuData& d) { return std::isfinite(d.timestamp) && d.wm.allFinite() && d.am.allFinite(); }
 
 /// One tracked feature in one image: a landmark id (data association comes from the front end
 /// or the simulator) and its distorted pixel coordinates.
