@@ -116,7 +116,7 @@ void EkfSlam::start(FilterState s, double scene_depth_m) {
 }
 
 bool EkfSlam::addImu(const ImuData& imu) {
-  if (!std::isfinite(imu.timestamp) || !imu.wm.allFinite() || !imu.am.allFinite()) return false;
+  if (!isFinite(imu)) return false;
   if (!imu_.empty() && imu.timestamp <= imu_.back().timestamp) return false;
   if (!imu_.empty() && imu.timestamp - imu_.back().timestamp > config_.max_imu_gap_s) ++imu_gaps_;
   imu_.push_back(imu);
@@ -141,14 +141,10 @@ void EkfSlam::bridgeImu(const ImuData& imu) {
 void EkfSlam::addBridgeUncertainty(FilterState& s, double t_before, double fraction) const {
   // What the left-out sample could have hidden: its departure from the last good sample, as an
   // unknown acceleration and rate over its period (the velocity and attitude it could have moved).
-  using namespace idx;
   for (const ImuBridge& b : bridges_) {
     if (b.t_before != t_before) continue;
-    const int m = s.motionDim();
-    MotionMatrix Q = MotionMatrix::Zero(m, m);
-    Q.block<3, 3>(kV, kV).diagonal() = fraction * (b.sigma_a * b.dt).cwiseAbs2();
-    Q.block<3, 3>(kPsi, kPsi).diagonal() = fraction * (b.sigma_g * b.dt).cwiseAbs2();
-    s.propagateCovariance(MotionMatrix::Identity(m, m), Q);
+    addUnseenMotion(s, Vec3::Zero(), fraction * (b.sigma_a * b.dt).cwiseAbs2(),
+                    fraction * (b.sigma_g * b.dt).cwiseAbs2());
   }
 }
 
@@ -213,14 +209,19 @@ void EkfSlam::addGapUncertainty(FilterState& s, double dt) const {
   // them fully correlated, and the first image after the gap would then fix the velocity from
   // the position alone, wrongly and with confidence: the gate then rejects every later
   // observation. SensorFaults.FilterRidesThroughDropoutGapOutliersAndCoveredCamera.)
+  const double sa = config_.imu_gap_accel_sigma_mps2, sg = config_.imu_gap_gyro_sigma_radps;
+  const double qa = sa * sa;
+  addUnseenMotion(s, Vec3::Constant(qa * std::pow(dt, 4) / 4.0), Vec3::Constant(qa * dt * dt),
+                  Vec3::Constant(sg * sg * dt * dt));
+}
+
+void EkfSlam::addUnseenMotion(FilterState& s, const Vec3& var_p, const Vec3& var_v, const Vec3& var_psi) {
   using namespace idx;
   const int m = s.motionDim();
-  const double sa = config_.imu_gap_accel_sigma_mps2, sg = config_.imu_gap_gyro_sigma_radps;
   MotionMatrix Q = MotionMatrix::Zero(m, m);
-  const double qa = sa * sa;
-  Q.block<3, 3>(kP, kP).diagonal().setConstant(qa * std::pow(dt, 4) / 4.0);
-  Q.block<3, 3>(kV, kV).diagonal().setConstant(qa * dt * dt);
-  Q.block<3, 3>(kPsi, kPsi).diagonal().setConstant(sg * sg * dt * dt);
+  Q.block<3, 3>(kP, kP).diagonal() = var_p;
+  Q.block<3, 3>(kV, kV).diagonal() = var_v;
+  Q.block<3, 3>(kPsi, kPsi).diagonal() = var_psi;
   s.propagateCovariance(MotionMatrix::Identity(m, m), Q);
 }
 

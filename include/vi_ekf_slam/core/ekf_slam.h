@@ -171,6 +171,8 @@ class EkfSlam {
   std::deque<ImuBridge> bridges_;
   /// The bridges' uncertainty for the piece of [a, b] integrated (fraction of it).
   void addBridgeUncertainty(FilterState& s, double t_before, double fraction) const;
+  /// Motion the IMU did not see: independent variances of position, velocity and attitude.
+  static void addUnseenMotion(FilterState& s, const Vec3& var_p, const Vec3& var_v, const Vec3& var_psi);
   int zero_velocity_updates_ = 0;
   StationaryDetector stationary_;
   DivergenceMonitor divergence_;
