@@ -9,6 +9,8 @@
 #include <string>
 #include <vector>
 
+#include "vi_ekf_slam/core/imu_sample_check.h"
+
 namespace vi_ekf_slam::glue {
 
 enum class FaultClass {
@@ -31,8 +33,9 @@ struct FaultPlan {
   FaultClass fault = FaultClass::kClippedImu;
   double size = 0.0;  ///< see FaultClass [s, or a probability]
   std::uint64_t seed = 1;
-  double accel_range_mps2 = 16.0 * 9.80665;                     ///< the clipped value of an accelerometer axis
-  double gyro_range_radps = 2000.0 * 3.14159265358979 / 180.0;  ///< of a gyro axis
+  /// The clipped value of an accelerometer and a gyro axis: the range the node assumes by default.
+  double accel_range_mps2 = ImuCheckParams().accel_range_mps2;
+  double gyro_range_radps = ImuCheckParams().gyro_range_radps;
 };
 
 /// What the copy holds that the original did not.
