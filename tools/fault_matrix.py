@@ -13,7 +13,6 @@ usage: fault_matrix.py --bin DIR --bag NAME=BAG[:REFERENCE.tum] [--bag ...] [--o
                        [--study]
 """
 import argparse
-import json
 import os
 import subprocess
 import sys
@@ -21,7 +20,6 @@ import sys
 import report
 
 MECH = "sensor_centric_composition"
-CLASSES = ["clipped_imu", "sensor_gaps", "covered_lens", "nan_imu", "dim_images", "lossy_link"]
 # The simulator's faults in the study (KIND:START_S:DURATION_S on the 37 s built-in walk).
 STUDY_FAULTS = {"clean": [], "imu_clipped": ["imu_clipped:8:8"], "imu_gap": ["imu_gap:12:0.5"],
                 "image_dropout": ["image_dropout:12:2"], "camera_covered": ["camera_covered:12:3"],
@@ -75,7 +73,9 @@ def main():
     ap.add_argument("--keep-bags", action="store_true", help="keep the faulty copies (they are as large as the bag)")
     ap.add_argument("--study", action="store_true", help="also the study with the simulator's faults")
     a = ap.parse_args()
-    classes = CLASSES if a.classes == "all" else a.classes.split(",")
+    every = subprocess.run([os.path.join(a.bin, "vi_ekf_slam_perturb_bag"), "--list-faults"], check=True,
+                           stdout=subprocess.PIPE, text=True).stdout.split()  # the names, written once in C++
+    classes = every if a.classes == "all" else a.classes.split(",")
     rows = {}
     for spec in a.bag:
         name, _, rest = spec.partition("=")
@@ -122,8 +122,6 @@ def main():
                "in the continuous odom frame."])
     print()
     print(text)
-    with open(os.path.join(a.out, "faults_rows.json"), "w") as f:
-        json.dump(rows, f)
 
 
 if __name__ == "__main__":

@@ -12,18 +12,20 @@ using namespace vi_ekf_slam;
 
 int main(int argc, char** argv) {
   std::string in, out, fault;
+  bool list = false;
   double size = 0.0;
   int seed = 1;
-  const std::string usage = "vi_ekf_slam_perturb_bag --bag IN --out OUT --fault CLASS [--size X] [--seed N]";
+  const std::string usage =
+      "vi_ekf_slam_perturb_bag --bag IN --out OUT --fault CLASS [--size X] [--seed N] | --list-faults";
   std::string classes;
   for (auto c : glue::allFaultClasses()) {
     classes += (classes.empty() ? "" : " | ") + glue::toString(c) + " (" +
                std::to_string(glue::defaultFaultSize(c)).substr(0, 4) + ")";
   }
   cli::po::options_description opts("options");
-  opts.add_options()("bag", cli::po::value(&in)->required(), "the input bag")("out", cli::po::value(&out)->required(),
-                                                                              "the faulty copy to write")(
-      "fault", cli::po::value(&fault)->required(), ("the fault class (default size): " + classes).c_str())(
+  opts.add_options()("list-faults", cli::po::bool_switch(&list), "print the fault classes, one a line, and exit")(
+      "bag", cli::po::value(&in), "the input bag")("out", cli::po::value(&out), "the faulty copy to write")(
+      "fault", cli::po::value(&fault), ("the fault class (default size): " + classes).c_str())(
       "size", cli::po::value(&size), "the fault's size: its period, length [s] or probability (see --help)")(
       "seed", cli::po::value(&seed)->default_value(seed), "random seed");
   cli::parse(argc, argv, usage,
@@ -32,6 +34,11 @@ int main(int argc, char** argv) {
              "SIZE s), dim_images (SIZE s of dim noisy images), lossy_link (images dropped with probability SIZE, "
              "duplicated, late).",
              opts);
+  if (list) {
+    for (auto c : glue::allFaultClasses()) std::printf("%s\n", glue::toString(c).c_str());
+    return 0;
+  }
+  if (in.empty() || out.empty() || fault.empty()) cli::fail(usage, "--bag, --out and --fault are required");
   const auto c = glue::faultClassFromString(fault);
   if (!c) cli::fail(usage, "unknown fault class '" + fault + "'; known: " + classes);
   glue::FaultPlan plan;

@@ -366,7 +366,11 @@ TEST(ToolsCli, PerturbBagWritesEachFaultClassAsItsSizeSays) {
   const BagCounts lossy = perturbed("lossy_link", 0.2);
   EXPECT_LT(lossy.images, clean.images * 1.0);
   EXPECT_GT(lossy.images, clean.images * 0.7);
-  // The tool refuses what it does not know.
+  // The tool names its classes (the fault matrix reads them), and refuses what it does not know.
+  const Outcome list = run(std::string(VI_TOOL_PERTURB_BAG) + " --list-faults");
+  EXPECT_EQ(list.code, 0) << list.output;
+  EXPECT_EQ(std::count(list.output.begin(), list.output.end(), '\n'), 6) << list.output;
+  EXPECT_NE(list.output.find("lossy_link\n"), std::string::npos) << list.output;
   const Outcome unknown =
       run(std::string(VI_TOOL_PERTURB_BAG) + " --bag " + dir + "/in.bag --out " + dir + "/x.bag --fault glove");
   EXPECT_EQ(unknown.code, 2) << unknown.output;
