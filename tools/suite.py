@@ -17,7 +17,6 @@ pose NEES and consistent fraction per seed, and the worst case over all cases an
 """
 import argparse
 import glob
-import math
 import os
 import subprocess
 import sys
@@ -79,10 +78,6 @@ def cases(data_dir, walks_dir):
             out.append(("%s@%d" % (name, start), path, start, WINDOW_S))
     out += [(name, path, 0.0, 0.0) for name, path in walk_files(walks_dir)]
     return out
-
-
-def fmt(v, digits=3):
-    return "-" if v is None or (isinstance(v, float) and not math.isfinite(v)) else ("%.*f" % (digits, v))
 
 
 def run_cases(a, seed, out_dir, walks, configs):
@@ -150,13 +145,6 @@ def run_cases(a, seed, out_dir, walks, configs):
                                headings={"worst": "Worst case over the %d cases" % len(results)})
     print(text)
     return rows, band
-
-
-def nees_cell(row):
-    """The pose NEES, marked (!) outside the band; a case the study could not run says so."""
-    if "failed" in row:
-        return "failed (%s)" % row["failed"].replace("|", "/")
-    return fmt(row["nees_pose"], 2) + ("" if row["nees_inside_band"] else " (!)")
 
 
 def row_columns(rows):
