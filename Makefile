@@ -195,7 +195,7 @@ $(REAL_BAG): $(BIN)/vi_ekf_slam_asl_to_bag
 	$(BIN)/vi_ekf_slam_asl_to_bag --asl $(REAL)/mav0 --out $@
 realdata: build $(REAL_BAG)
 	source $(DEVEL)/setup.bash && $(BIN)/vi_ekf_slam_run_bag --bag $(REAL_BAG) --out results/realdata/defaults --mechanization all $(REAL_REFS)
-	source $(DEVEL)/setup.bash && $(BIN)/vi_ekf_slam_run_bag --bag $(REAL_BAG) --out results/realdata/rig --rig config/dmvio_handheld.yaml $(REAL_REFS)
+	source $(DEVEL)/setup.bash && $(BIN)/vi_ekf_slam_run_bag --bag $(REAL_BAG) --out results/realdata/rig --rig config/rigs/dmvio_handheld.yaml $(REAL_REFS)
 
 # Faults (docs/evaluation.md): faulty copies of the real hand-held recording and of the rendered
 # walk, one class at a time (clipped IMU samples, sensor gaps, a covered lens, NaN IMU samples, dim

@@ -68,7 +68,7 @@ struct Options {
 /// Parses argv into *o (--help and usage errors exit, as every tool's).
 void parseArguments(int argc, char** argv, Options* o) {
   const std::string usage =
-      "vi_ekf_slam_run_bag --bag FILE [--out DIR] [--config YAML] [--rig YAML] [--param NAME=VALUE ...] "
+      "vi_ekf_slam_run_bag --bag FILE [--out DIR] [--config YAML] [--rig NAME|YAML] [--param NAME=VALUE ...] "
       "[--mechanization NAME|all] [--reference FILE.tum ...]\n"
       "       vi_ekf_slam_run_bag --bag FILE --recorded NAME=REC.bag [--recorded ...] [--out DIR]";
   po::options_description d("options");
@@ -77,8 +77,9 @@ void parseArguments(int argc, char** argv, Options* o) {
   d.add_options()("bag", po::value(&o->bag)->required(), "the input bag")(
       "out", po::value(&o->out), "output directory (default results/run_bag/<bag name>)")(
       "config", po::value(&o->config), "node parameters, YAML (default: the package's config/vi_ekf_slam.yaml)")(
-      "rig", po::value(&o->rig), "a rig file (calibration values) on top of --config")(
-      "param", po::value(&o->params)->composing(), "NAME=VALUE: one node parameter (repeatable)")(
+      "rig", po::value(&o->rig),
+      "a rig preset (NAME of config/rigs/NAME.yaml) or the path of a rig file, on top of "
+      "--config")("param", po::value(&o->params)->composing(), "NAME=VALUE: one node parameter (repeatable)")(
       "mechanization", po::value(&o->mechanization),
       "world_centric | sensor_centric | sensor_centric_composition | all")(
       "imu-topic", po::value(&imu), "sensor_msgs/Imu topic (default: the bag's one)")(
@@ -138,21 +139,21 @@ std::vector<Reference> readReferences(const Options& o) {
   return refs;
 }
 
-/// The package's default configuration, found as any ROS tool finds a package (devel space or
-/// installed), never in the source tree the binary was built from.
-std::string defaultConfig() {
+/// The package's files, found as any ROS tool finds a package (devel space or installed), never in
+/// the source tree the binary was built from.
+std::string packageShare() {
   const std::string share = ros::package::getPath("vi_ekf_slam");
   if (share.empty()) {
     throw std::runtime_error(
-        "the package vi_ekf_slam is not on ROS_PACKAGE_PATH (source setup.bash) and no --config was given");
+        "the package vi_ekf_slam is not on ROS_PACKAGE_PATH (source setup.bash) for its config and rig presets");
   }
-  return share + "/config/vi_ekf_slam.yaml";
+  return share;
 }
 
 /// The node's parameters: --config, --rig over it, each --param, the mechanization.
 glue::NodeParams nodeParams(const Options& o, const std::string& mechanization) {
   glue::YamlParams yaml(o.config);
-  if (!o.rig.empty()) yaml.overlay(glue::YamlParams(o.rig));
+  if (!o.rig.empty()) yaml.overlay(glue::YamlParams(glue::rigFile(o.rig, ros::package::getPath("vi_ekf_slam"))));
   for (const std::string& p : o.params) {
     const auto eq = p.find('=');
     if (eq == std::string::npos || eq == 0) throw std::runtime_error("--param takes name=value (got '" + p + "')");
@@ -340,7 +341,7 @@ int main(int argc, char** argv) {
   glue::InputBagInfo info;
   glue::InputTopics topics;
   try {
-    if (o.config.empty()) o.config = defaultConfig();
+    if (o.config.empty()) o.config = packageShare() + "/config/vi_ekf_slam.yaml";
     refs = readReferences(o);
   } catch (const std::exception& e) {
     std::cerr << "error: " << e.what() << "\n";
@@ -353,7 +354,12 @@ int main(int argc, char** argv) {
     return 1;
   }
   try {
-    if (o.recorded.empty()) topics = glue::chooseInputTopics(o.bag, o.imu_topic, o.image_topic, o.camera_info_topic);
+    if (o.recorded.empty()) {
+      // The rig's topics where the bag has them.
+      const glue::NodeOptions n = nodeParams(o, "").node;
+      const glue::InputTopics rig_topics{n.imu_topic, n.image_topic, n.camera_info_topic};
+      topics = glue::chooseInputTopics(o.bag, o.imu_topic, o.image_topic, o.camera_info_topic, &rig_topics);
+    }
   } catch (const std::exception& e) {
     std::cerr << "error: " << e.what() << "\n";
     return 2;

@@ -78,19 +78,21 @@ void RecordingSink::event(const std::string& text) {
 }
 
 InputTopics chooseInputTopics(const std::string& bag_path, const std::optional<std::string>& imu,
-                              const std::optional<std::string>& image, const std::optional<std::string>& camera_info) {
+                              const std::optional<std::string>& image, const std::optional<std::string>& camera_info,
+                              const InputTopics* preferred) {
   rosbag::Bag bag(bag_path, rosbag::bagmode::Read);
   rosbag::View view(bag);
   std::map<std::string, std::string> types;  // topic -> datatype
   for (const rosbag::ConnectionInfo* c : view.getConnections()) types[c->topic] = c->datatype;
   auto choose = [&](const std::string& option, const std::optional<std::string>& requested,
-                    const std::vector<std::string>& accepted) {
+                    const std::vector<std::string>& accepted, const std::string& preferred_topic) {
     std::vector<std::string> found;
     for (const auto& [topic, type] : types) {
       if (std::find(accepted.begin(), accepted.end(), type) != accepted.end()) found.push_back(topic);
     }
     std::string list;
     for (const auto& t : found) list += " " + t + " (" + types[t] + ")";
+    if (!requested && !preferred_topic.empty() && types.count(preferred_topic)) return preferred_topic;
     if (requested) {
       if (std::find(found.begin(), found.end(), *requested) == found.end()) {
         throw std::runtime_error(option + " " + *requested + " is not a topic of type " + accepted.front() +
@@ -105,11 +107,13 @@ InputTopics chooseInputTopics(const std::string& bag_path, const std::optional<s
     return found.front();
   };
   InputTopics t;
-  t.imu = choose("--imu-topic", imu, {"sensor_msgs/Imu"});
-  t.image = choose("--image-topic", image, {"sensor_msgs/Image", "sensor_msgs/CompressedImage"});
+  const InputTopics none;
+  const InputTopics& pref = preferred ? *preferred : none;
+  t.imu = choose("--imu-topic", imu, {"sensor_msgs/Imu"}, pref.imu);
+  t.image = choose("--image-topic", image, {"sensor_msgs/Image", "sensor_msgs/CompressedImage"}, pref.image);
   // camera_info is optional (camera_calibration_file may give the intrinsics instead).
   try {
-    t.camera_info = choose("--camera-info-topic", camera_info, {"sensor_msgs/CameraInfo"});
+    t.camera_info = choose("--camera-info-topic", camera_info, {"sensor_msgs/CameraInfo"}, pref.camera_info);
   } catch (const std::exception&) {
     if (camera_info) throw;
   }

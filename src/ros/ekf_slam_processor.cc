@@ -77,14 +77,18 @@ std::string EkfSlamProcessor::reconfigure(const EkfSlamReconfigureConfig& config
 }
 
 void EkfSlamProcessor::cameraInfo(const sensor_msgs::CameraInfo& msg) {
-  bool changed = false;
-  const std::string err = calibration_.cameraInfo(msg, &changed);
-  if (!err.empty()) {
+  const CameraInfoUse use = calibration_.cameraInfo(msg);
+  if (!use.error.empty()) {
     ++counters_.camera_info_invalid;
-    reportProblem("camera_info ignored: " + err);
+    reportProblem("camera_info ignored: " + use.error);
     return;
   }
-  if (changed && pipeline_->hasCamera()) {
+  if (use.ignored) ++counters_.camera_info_ignored;
+  if (!use.ignored_once.empty()) {
+    ROS_WARN_STREAM("vi_ekf_slam: " << use.ignored_once);
+    last_problem_ = use.ignored_once;
+  }
+  if (use.changed && pipeline_->hasCamera()) {
     // A new calibration invalidates the map and the tracks: start over.
     pipeline_->clearCamera();
     tracker_.reset();

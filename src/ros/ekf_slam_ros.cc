@@ -56,7 +56,9 @@ EkfSlamRos::EkfSlamRos(ros::NodeHandle nh, ros::NodeHandle pnh) : nh_(nh), pnh_(
         path_.poses.clear();
         updater_.force_update();
         res.success = true;
-        res.message = "filter reset; re-initializing at the next static interval";
+        res.message = processor_->params().dynamic_init_enabled
+                          ? "filter reset; re-initializing at the next static interval or moving start"
+                          : "filter reset; re-initializing at the next static interval";
         return true;
       });
 
@@ -80,22 +82,22 @@ EkfSlamRos::EkfSlamRos(ros::NodeHandle nh, ros::NodeHandle pnh) : nh_(nh), pnh_(
   }
 
   imu_sub_ = nh_.subscribe<sensor_msgs::Imu>(
-      "imu", 2000,
+      params.node.imu_topic, 2000,
       [this](const sensor_msgs::ImuConstPtr& m) {
         std::lock_guard<std::mutex> lock(mutex_);
         imu_rate_->tick();
         processor_->imu(*m);
       },
       ros::VoidConstPtr(), ros::TransportHints().tcpNoDelay());
-  info_sub_ =
-      nh_.subscribe<sensor_msgs::CameraInfo>("camera_info", 5, [this](const sensor_msgs::CameraInfoConstPtr& m) {
-        std::lock_guard<std::mutex> lock(mutex_);
-        processor_->cameraInfo(*m);
-      });
+  info_sub_ = nh_.subscribe<sensor_msgs::CameraInfo>(params.node.camera_info_topic, 5,
+                                                     [this](const sensor_msgs::CameraInfoConstPtr& m) {
+                                                       std::lock_guard<std::mutex> lock(mutex_);
+                                                       processor_->cameraInfo(*m);
+                                                     });
   // Resolve (and remap) the base topic first: image_transport appends "/compressed" to the name it
   // is given, and a remap of "image" would not reach "image/compressed" otherwise.
   image_sub_ = it_.subscribe(
-      nh_.resolveName("image"), 5,
+      nh_.resolveName(params.node.image_topic), 5,
       [this](const sensor_msgs::ImageConstPtr& m) {
         std::lock_guard<std::mutex> lock(mutex_);
         image_rate_->tick();
@@ -183,6 +185,8 @@ void EkfSlamRos::diagnoseInputs(diagnostic_updater::DiagnosticStatusWrapper& sta
   stat.add("images dropped: no camera calibration", c.images_no_camera);
   stat.add("images dropped: no IMU past stamp", c.images_queue_dropped);
   stat.add("camera_info invalid", c.camera_info_invalid);
+  stat.add("camera_info ignored (calibration_source file)", c.camera_info_ignored);
+  stat.add("calibration", processor_->calibrationSummary());
   stat.add("image gaps", c.image_gaps);
   stat.add("images without features", c.images_without_features);
   stat.add("outlier bursts", c.outlier_bursts);
@@ -193,10 +197,13 @@ void EkfSlamRos::diagnoseFilter(diagnostic_updater::DiagnosticStatusWrapper& sta
   using diagnostic_msgs::DiagnosticStatus;
   const EkfSlam* f = processor_->filter();
   if (!f || !f->initialized()) {
-    stat.summary(DiagnosticStatus::WARN, processor_->lastLost().empty()
-                                             ? "not initialized (waiting for camera and a static IMU interval)"
-                                             : "lost (" + processor_->lastLost() +
-                                                   "): reset, waiting for a static IMU interval to re-initialize");
+    const std::string start = processor_->params().dynamic_init_enabled
+                                  ? "a static IMU interval or enough motion for the moving start"
+                                  : "a static IMU interval";
+    stat.summary(DiagnosticStatus::WARN,
+                 processor_->lastLost().empty()
+                     ? "not initialized (waiting for the camera and " + start + ")"
+                     : "lost (" + processor_->lastLost() + "): reset, waiting for " + start + " to re-initialize");
   } else {
     stat.summary(DiagnosticStatus::OK, "running");
   }

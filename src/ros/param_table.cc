@@ -82,6 +82,12 @@ std::vector<ParamSpec> makeTable() {
   using D = TrackerParams::Detector;
   const bool dyn = true;
   return {
+      // --- topics
+      field("imu_topic", "topics", VI_FIELD(p.node.imu_topic), "", "sensor_msgs/Imu"),
+      field("image_topic", "topics", VI_FIELD(p.node.image_topic), "",
+            "image_transport base topic (sensor_msgs/Image, or <topic>/compressed)"),
+      field("camera_info_topic", "topics", VI_FIELD(p.node.camera_info_topic), "",
+            "sensor_msgs/CameraInfo (optional when the intrinsics come from a file)"),
       // --- frames
       choice("publish_tf", "frames", VI_FIELD(p.node.publish_tf),
              "which TF the node broadcasts, and the frames of its outputs", false,
@@ -106,8 +112,28 @@ std::vector<ParamSpec> makeTable() {
             "t_imu = t_image + offset (camera-IMU clock offset) at the start; estimated online", false),
       field("camera_readout_time_s", "camera", VI_FIELD(p.filter.update.readout_time_s), "s",
             "rolling shutter: first to last row (0: global shutter)", false),
+      stringChoice("calibration_source", "camera", VI_FIELD(p.node.calibration_source),
+                   "where the intrinsics come from when both a file and camera_info give them",
+                   {{"camera_info", "the driver's camera_info (a file's intrinsics until it arrives)"},
+                    {"file",
+                     "the file (camera_calibration_file, camera_intrinsics or kalibr_camchain); a "
+                     "differing camera_info is reported once and ignored"}}),
       field("camera_calibration_file", "camera", VI_FIELD(p.node.camera_calibration_file), "",
-            "ROS camera YAML (camera_calibration_parsers) used until camera_info arrives"),
+            "intrinsics from a ROS camera YAML (camera_calibration_parsers)"),
+      field("camera_intrinsics", "camera", VI_FIELD(p.node.camera_intrinsics), "px",
+            "intrinsics from the parameters: fx fy cx cy ([]: none; needs camera_resolution)"),
+      field("camera_resolution", "camera", VI_FIELD(p.node.camera_resolution), "px",
+            "width height of the images camera_intrinsics belong to"),
+      stringChoice("camera_distortion_model", "camera", VI_FIELD(p.node.camera_distortion_model),
+                   "distortion of camera_intrinsics",
+                   {{"radtan", "radial-tangential (ROS plumb_bob)"}, {"equidistant", "Kannala-Brandt (fisheye)"}}),
+      field("camera_distortion_coeffs", "camera", VI_FIELD(p.node.camera_distortion_coeffs), "",
+            "distortion of camera_intrinsics: radtan k1 k2 p1 p2 [k3], equidistant k1 k2 k3 k4 ([]: none)"),
+      field("kalibr_camchain", "camera", VI_FIELD(p.node.kalibr_camchain), "",
+            "Kalibr camchain-imucam.yaml: its intrinsics, T_b_c, time offset and line delay replace those "
+            "parameters"),
+      field("kalibr_imu", "camera", VI_FIELD(p.node.kalibr_imu), "",
+            "Kalibr imu.yaml: its noise densities and random walks replace those parameters"),
       stringChoice("extrinsic_source", "camera", VI_FIELD(p.node.extrinsic_source),
                    "where the camera-IMU extrinsic comes from",
                    {{"tf", "TF: IMU frame <- the images' frame_id"}, {"parameters", "T_b_c"}}),
@@ -373,6 +399,7 @@ std::string ParamSpec::check(const ParamValue& v) const {
 
 const std::vector<ParamGroup>& paramGroups() {
   static const std::vector<ParamGroup> groups = {
+      {"topics", "input topics (names resolved in the node's namespace; remapping applies)"},
       {"frames", "frames (REP-105)"},
       {"camera", "camera"},
       {"filter", "filter"},

@@ -2,10 +2,14 @@
 
 #include <dynamic_reconfigure/Config.h>
 #include <ros/param.h>
+#include <algorithm>
 #include <cmath>
+#include <filesystem>
 #include <sstream>
 #include <stdexcept>
 
+#include "vi_ekf_slam/ros/calibration_source.h"
+#include "vi_ekf_slam/ros/kalibr_import.h"
 #include "vi_ekf_slam/ros/param_table.h"
 
 namespace vi_ekf_slam::glue {
@@ -32,6 +36,9 @@ std::string deriveAndValidate(NodeParams& p) {
   p.dynamic_init.gravity_mps2 = p.filter.gravity_mps2;
   p.dynamic_init.pixel_noise_px = p.filter.update.pixel_noise_px;
   const NodeOptions& n = p.node;
+  if (n.imu_topic.empty() || n.image_topic.empty() || n.camera_info_topic.empty()) {
+    err << "imu_topic, image_topic and camera_info_topic must not be empty\n";
+  }
   if (n.world_frame.empty()) err << "world_frame must not be empty\n";
   if (n.world_frame == n.body_frame) err << "world_frame and body_frame must differ\n";
   if (n.odom_frame.empty()) err << "odom_frame must not be empty\n";
@@ -45,6 +52,15 @@ std::string deriveAndValidate(NodeParams& p) {
     const double qn = std::sqrt(n.T_b_c[3] * n.T_b_c[3] + n.T_b_c[4] * n.T_b_c[4] + n.T_b_c[5] * n.T_b_c[5] +
                                 n.T_b_c[6] * n.T_b_c[6]);
     if (!(std::abs(qn - 1.0) < 1e-3)) err << "T_b_c quaternion must have unit norm (got " << qn << ")\n";
+  }
+  std::optional<CameraIntrinsics> file_intrinsics;
+  const std::string bad_intrinsics = intrinsicsFromOptions(n, &file_intrinsics);
+  if (!bad_intrinsics.empty()) err << bad_intrinsics << "\n";
+  if (!n.camera_intrinsics.empty() && !n.camera_calibration_file.empty()) {
+    err << "camera_intrinsics and camera_calibration_file both give the intrinsics: set one\n";
+  }
+  if (n.calibration_source == "file" && n.camera_intrinsics.empty() && n.camera_calibration_file.empty()) {
+    err << "calibration_source file needs camera_intrinsics, camera_calibration_file or kalibr_camchain\n";
   }
   err << p.filter.validate() << p.tracker.validate() << p.dynamic_init.validate();
   return err.str();
@@ -142,9 +158,60 @@ bool YamlParams::get(const std::string& name, std::vector<double>& v) const {
   return values_.at(name).IsSequence() && yamlAs(values_.at(name), v);
 }
 
-std::string loadParams(const ParamSource& source, NodeParams* out) {
+std::vector<std::string> rigPresets(const std::string& package_share) {
+  std::vector<std::string> out;
+  std::error_code ec;
+  for (const auto& e : std::filesystem::directory_iterator(package_share + "/config/rigs", ec)) {
+    if (e.path().extension() == ".yaml") out.push_back(e.path().stem().string());
+  }
+  std::sort(out.begin(), out.end());
+  return out;
+}
+
+std::string rigFile(const std::string& rig, const std::string& package_share) {
+  const bool is_path =
+      rig.find('/') != std::string::npos || (rig.size() > 5 && rig.compare(rig.size() - 5, 5, ".yaml") == 0);
+  if (is_path) return rig;
+  const std::string path = package_share + "/config/rigs/" + rig + ".yaml";
+  if (std::filesystem::exists(path)) return path;
+  std::string known;
+  for (const std::string& p : rigPresets(package_share)) known += " " + p;
+  throw std::runtime_error("no rig preset '" + rig + "' (presets:" + known + "; or give the path of a rig file)");
+}
+
+std::vector<std::string> LayeredParams::names() const {
+  std::vector<std::string> out = top_.names();
+  for (const std::string& n : below_.names()) {
+    if (!top_.has(n)) out.push_back(n);
+  }
+  return out;
+}
+
+namespace {
+
+/// The values of the Kalibr files named in `source` (kalibr_camchain, kalibr_imu), or why not. They
+/// replace the parameters they set: the file is the calibration.
+YamlParams kalibrValues(const ParamSource& source, std::ostringstream& err) {
+  YamlParams out;
+  std::string camchain, imu;
+  if (source.has("kalibr_camchain")) source.get("kalibr_camchain", camchain);
+  if (source.has("kalibr_imu")) source.get("kalibr_imu", imu);
+  if (camchain.empty() && imu.empty()) return out;
+  try {
+    for (const auto& [name, value] : importKalibr(camchain, imu).params) out.set(name, value);
+  } catch (const std::exception& e) {
+    err << e.what() << "\n";
+  }
+  return out;
+}
+
+}  // namespace
+
+std::string loadParams(const ParamSource& explicit_source, NodeParams* out) {
   NodeParams p;
   std::ostringstream err;
+  const YamlParams kalibr = kalibrValues(explicit_source, err);
+  const LayeredParams source(kalibr, explicit_source);
   for (const std::string& name : source.names()) {
     if (findParam(name)) continue;
     const std::string near = closestParamName(name);

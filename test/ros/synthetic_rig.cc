@@ -65,6 +65,8 @@ RigStream makeRigStream(const RigOptions& o, double t0) {
   std::mt19937_64 rng(static_cast<std::uint64_t>(o.seed));
   sc.imu.initial_accel_bias_sigma_mps2 = 0.02;
   sc.imu.initial_gyro_bias_sigma_radps = 0.001;
+  if (o.camera) sc.camera = CameraModel(*o.camera);
+  if (o.T_b_c) sc.T_b_c = *o.T_b_c;
   const sim::ImuSequence imu = sim::simulateImu(*sc.trajectory, sc.imu, rng);
   sim::Renderer renderer(sim::hallwayGeometry(hp), sc.camera, sc.T_b_c, sim::RenderParams());
   std::vector<double> frame_t;

@@ -16,6 +16,10 @@
 #include <sensor_msgs/CompressedImage.h>
 #include <sensor_msgs/Image.h>
 #include <sensor_msgs/Imu.h>
+
+#include "vi_ekf_slam/core/camera_model.h"
+#include "vi_ekf_slam/core/measurement_model.h"
+#include <optional>
 #include <string>
 #include <variant>
 #include <vector>
@@ -28,6 +32,9 @@ struct RigOptions {
   std::string fault = "none";
   int seed = 1;
   std::string imu_frame = "imu", camera_frame = "camera";
+  /// The rendered camera and its pose in the IMU frame (default: the hallway scenario's).
+  std::optional<CameraIntrinsics> camera;
+  std::optional<CameraExtrinsics> T_b_c;
 };
 
 struct RigMessage {

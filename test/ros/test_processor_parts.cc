@@ -40,15 +40,14 @@ TEST(CalibrationSource, SaysWhatIsMissingAndWhenTheCalibrationChanges) {
   CameraIntrinsics in = smallCamera();
   std_msgs::Header h;
   h.frame_id = "cam0";
-  bool changed = false;
   sensor_msgs::CameraInfo zero = toCameraInfo(in, h);
   zero.K.fill(0.0);
-  EXPECT_NE(cal.cameraInfo(zero, &changed), "");
-  EXPECT_FALSE(changed);
-  EXPECT_EQ(cal.cameraInfo(toCameraInfo(in, h), &changed), "");
-  EXPECT_TRUE(changed);
-  EXPECT_EQ(cal.cameraInfo(toCameraInfo(in, h), &changed), "");
-  EXPECT_FALSE(changed) << "the same calibration again";
+  EXPECT_NE(cal.cameraInfo(zero).error, "");
+  EXPECT_FALSE(cal.cameraInfo(zero).changed);
+  const CameraInfoUse first = cal.cameraInfo(toCameraInfo(in, h));
+  EXPECT_EQ(first.error, "");
+  EXPECT_TRUE(first.changed);
+  EXPECT_FALSE(cal.cameraInfo(toCameraInfo(in, h)).changed) << "the same calibration again";
   EXPECT_NE(cal.ready("", "imu0", nullptr).find("image has no frame_id"), std::string::npos);
   EXPECT_NE(cal.ready("cam0", "", nullptr).find("waiting for IMU messages"), std::string::npos);
   EXPECT_NE(cal.ready("cam0", "imu0", nullptr).find("no TF"), std::string::npos);
@@ -63,8 +62,9 @@ TEST(CalibrationSource, SaysWhatIsMissingAndWhenTheCalibrationChanges) {
   ASSERT_EQ(cal.ready("cam0", "imu0", &tf), "");
   EXPECT_NEAR(cal.extrinsics().p_b_c.x(), 0.1, 1e-12);
   in.fx = 60.0;
-  EXPECT_EQ(cal.cameraInfo(toCameraInfo(in, h), &changed), "");
-  EXPECT_TRUE(changed);
+  const CameraInfoUse use = cal.cameraInfo(toCameraInfo(in, h));
+  EXPECT_EQ(use.error, "");
+  EXPECT_TRUE(use.changed);
   EXPECT_EQ(cal.intrinsics().fx, 60.0);
 }
 

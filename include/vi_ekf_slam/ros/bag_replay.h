@@ -46,10 +46,13 @@ struct InputTopics {
   std::string imu, image, camera_info;
 };
 
-/// The topics as requested (checked against the bag), or the one topic of each type the bag holds;
-/// several, or none, is an error (std::runtime_error) that lists them. camera_info is optional.
+/// The topics as requested (checked against the bag), else the preferred one where the bag has it
+/// (the node's imu_topic, image_topic, camera_info_topic), else the one topic of each type the bag
+/// holds; several, or none, is an error (std::runtime_error) that lists them. camera_info is
+/// optional.
 InputTopics chooseInputTopics(const std::string& bag_path, const std::optional<std::string>& imu,
-                              const std::optional<std::string>& image, const std::optional<std::string>& camera_info);
+                              const std::optional<std::string>& image, const std::optional<std::string>& camera_info,
+                              const InputTopics* preferred = nullptr);
 
 /// Feeds the bag's IMU, images (raw or compressed), camera_info and TF to the processor in bag
 /// order; returns the wall time it took [s].

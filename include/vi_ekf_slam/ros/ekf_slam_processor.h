@@ -38,7 +38,7 @@ struct InputCounters {
   long imu_clipped = 0, imu_implausible = 0;  ///< samples bridged (ImuSampleCheck)
   long images_received = 0, images_processed = 0, images_bad_encoding = 0, images_stale = 0;
   long images_late = 0, images_before_init = 0, images_no_camera = 0, images_queue_dropped = 0;
-  long camera_info_invalid = 0, rejected_observations = 0, resets = 0;
+  long camera_info_invalid = 0, camera_info_ignored = 0, rejected_observations = 0, resets = 0;
   // Faults the filter rides through (reported, not dropped): no image for longer than
   // max_image_gap_s, images in which no feature could be tracked (camera covered, darkness), and
   // updates in which the gate rejected most observations (a burst of outlier tracks).
@@ -91,6 +91,7 @@ class EkfSlamProcessor : private PipelineListener {
   const NodeParams& params() const { return params_; }
   const InputCounters& counters() const { return counters_; }
   const std::string& lastProblem() const { return last_problem_; }
+  std::string calibrationSummary() const { return calibration_.summary(); }
   /// The inputs' health for the diagnostics: level (diagnostic_msgs::DiagnosticStatus OK 0, WARN 1,
   /// ERROR 2: nothing usable arrives) and its summary.
   std::pair<int, std::string> inputsHealth() const;

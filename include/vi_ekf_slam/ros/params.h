@@ -19,6 +19,9 @@
 namespace vi_ekf_slam::glue {
 
 struct NodeOptions {
+  std::string imu_topic = "/imu";                         ///< sensor_msgs/Imu
+  std::string image_topic = "/camera/image_raw";          ///< image_transport base topic
+  std::string camera_info_topic = "/camera/camera_info";  ///< sensor_msgs/CameraInfo
   /// What the outputs are expressed in and which TF is broadcast (see output_frames.h): odom
   /// (REP-105: odom_frame -> base_frame), none (the same frames, no TF), world (world_frame -> IMU).
   TfMode publish_tf = TfMode::kOdom;
@@ -28,8 +31,17 @@ struct NodeOptions {
   std::string world_frame = "world";  ///< publish_tf world: the filter's world, z up
   /// The IMU/body frame; "": the frame_id of the IMU messages ("imu" if they carry none).
   std::string body_frame;
-  bool tune_allocator = true;                         ///< see core/allocator_tuning.h
-  std::string camera_calibration_file;                ///< ROS camera YAML used while no camera_info arrives
+  bool tune_allocator = true;           ///< see core/allocator_tuning.h
+  std::string camera_calibration_file;  ///< ROS camera YAML (intrinsics from a file)
+  /// "camera_info": the driver's camera_info wins over a file; "file": the file's intrinsics are
+  /// used and a differing camera_info is reported once and ignored.
+  std::string calibration_source = "camera_info";
+  std::vector<double> camera_intrinsics;              ///< fx fy cx cy [px] (intrinsics from the parameters)
+  std::vector<double> camera_resolution;              ///< width height [px]
+  std::string camera_distortion_model = "radtan";     ///< "radtan" (plumb_bob) or "equidistant"
+  std::vector<double> camera_distortion_coeffs;       ///< radtan k1 k2 p1 p2 [k3]; equidistant k1..k4
+  std::string kalibr_camchain;                        ///< Kalibr camchain-imucam.yaml (see kalibr_import.h)
+  std::string kalibr_imu;                             ///< Kalibr imu.yaml
   std::string extrinsic_source = "tf";                ///< "tf" (body_frame <- image frame_id) or "parameters"
   std::string image_transport = "raw";                ///< "raw" or "compressed"
   std::vector<double> T_b_c = {0, 0, 0, 0, 0, 0, 1};  ///< x y z qx qy qz qw of the camera in the body [m]
@@ -87,6 +99,7 @@ class NodeHandleParams : public ParamSource {
 /// yaml-cpp. Throws std::runtime_error naming the file when it cannot be read.
 class YamlParams : public ParamSource {
  public:
+  YamlParams() = default;
   explicit YamlParams(const std::string& path);
   /// Sets one value, written as in YAML (`1.5`, `true`, `[0, 1]`, `name`).
   void set(const std::string& name, const std::string& value);
@@ -106,7 +119,33 @@ class YamlParams : public ParamSource {
   std::map<std::string, YAML::Node> values_;
 };
 
-/// Reads every parameter of the table (param_table.h; defaults where unset). Returns the problems,
+/// `top` where it has a value, else `below` (the values of Kalibr files over the other parameters).
+class LayeredParams : public ParamSource {
+ public:
+  LayeredParams(const ParamSource& top, const ParamSource& below) : top_(top), below_(below) {}
+  std::vector<std::string> names() const override;
+  bool has(const std::string& name) const override { return top_.has(name) || below_.has(name); }
+  bool get(const std::string& name, double& v) const override { return from(name).get(name, v); }
+  bool get(const std::string& name, int& v) const override { return from(name).get(name, v); }
+  bool get(const std::string& name, bool& v) const override { return from(name).get(name, v); }
+  bool get(const std::string& name, std::string& v) const override { return from(name).get(name, v); }
+  bool get(const std::string& name, std::vector<double>& v) const override { return from(name).get(name, v); }
+
+ private:
+  const ParamSource& from(const std::string& name) const { return top_.has(name) ? top_ : below_; }
+  const ParamSource& top_;
+  const ParamSource& below_;
+};
+
+/// The rig file `rig` names: a path as given (it has a '/' or ends in .yaml), else the preset
+/// <package_share>/config/rigs/<rig>.yaml. Throws std::runtime_error listing the presets when
+/// there is no such preset.
+std::string rigFile(const std::string& rig, const std::string& package_share);
+/// The presets of <package_share>/config/rigs, sorted.
+std::vector<std::string> rigPresets(const std::string& package_share);
+
+/// Reads every parameter of the table (param_table.h; defaults where unset; where kalibr_camchain
+/// or kalibr_imu is set, the values of those files replace the parameters they set). Returns the problems,
 /// one per line (unknown names with the closest valid one, wrong types, values out of range,
 /// impossible combinations), or an empty string.
 std::string loadParams(const ParamSource& source, NodeParams* out);
