@@ -13,9 +13,9 @@ EkfSlamRos::EkfSlamRos(ros::NodeHandle nh, ros::NodeHandle pnh) : nh_(nh), pnh_(
   const std::string err = loadParams(NodeHandleParams(pnh_), &params);
   if (!err.empty()) throw std::invalid_argument("vi_ekf_slam: impossible parameter values:\n" + err);
   ROS_INFO_STREAM(describeParams(params));
-  // TF is read for the camera-IMU extrinsic and for base_frame <- IMU.
-  if (params.node.extrinsic_source == "tf" || !params.node.base_frame.empty())
-    tf_listener_ = std::make_unique<tf2_ros::TransformListener>(tf_buffer_, nh_);
+  // TF is read for the camera-IMU extrinsic, for base_frame <- IMU, and to find whether the frame
+  // the node moves already has a parent.
+  tf_listener_ = std::make_unique<tf2_ros::TransformListener>(tf_buffer_, nh_);
   if (params.node.publish_tf == TfMode::kOdom && !params.node.map_frame.empty()) {
     // No global localizer: map and odom coincide (REP-105).
     geometry_msgs::TransformStamped t;
@@ -42,6 +42,7 @@ EkfSlamRos::EkfSlamRos(ros::NodeHandle nh, ros::NodeHandle pnh) : nh_(nh), pnh_(
   updater_.add(*imu_rate_);
   updater_.add(*image_rate_);
   updater_.add("filter", this, &EkfSlamRos::diagnoseFilter);
+  if (params.node.publish_tf != TfMode::kNone) updater_.add("tf", this, &EkfSlamRos::diagnoseTf);
   odom_pub_ = nh_.advertise<nav_msgs::Odometry>("odom", 50);
   odom_imu_pub_ = nh_.advertise<nav_msgs::Odometry>("odom_imu", 200);
   path_pub_ = nh_.advertise<nav_msgs::Path>("path", 2);
@@ -119,7 +120,8 @@ image_transport::TransportHints EkfSlamRos::imageTransportHints() const {
 void EkfSlamRos::odometry(const nav_msgs::Odometry& odom) {
   const NodeOptions& o = processor_->params().node;
   odom_pub_.publish(odom);
-  if (o.publish_tf != TfMode::kNone) {  // odom_frame -> base_frame, or world_frame -> IMU frame
+  if (o.publish_tf != TfMode::kNone && tfConflict(odom.header.frame_id, odom.child_frame_id).empty()) {
+    // odom_frame -> base_frame, or world_frame -> IMU frame
     geometry_msgs::TransformStamped t;
     t.header = odom.header;
     t.child_frame_id = odom.child_frame_id;
@@ -128,6 +130,7 @@ void EkfSlamRos::odometry(const nav_msgs::Odometry& odom) {
     t.transform.translation.z = odom.pose.pose.position.z;
     t.transform.rotation = odom.pose.pose.orientation;
     tf_broadcaster_.sendTransform(t);
+    tf_sent_ = true;
   }
   geometry_msgs::PoseStamped ps;
   ps.header = odom.header;
@@ -158,6 +161,34 @@ void EkfSlamRos::event(const std::string& text) {
   if (text.rfind("reset", 0) == 0) {
     path_.poses.clear();
     updater_.force_update();
+  }
+}
+
+const std::string& EkfSlamRos::tfConflict(const std::string& parent, const std::string& child) {
+  if (tf_sent_ || !tf_conflict_.empty()) return tf_conflict_;
+  std::string existing;
+  if (tf_buffer_._getParent(child, ros::Time(), existing) && existing != parent) {
+    tf_conflict_ = "'" + child + "' already has the parent '" + existing + "' on TF: " + parent + " -> " + child +
+                   " is not broadcast (a frame has one parent). Set base_frame to the root of that tree (e.g. " +
+                   "base_frame:=" + existing + ") or publish_tf:=none";
+    ROS_ERROR_STREAM("vi_ekf_slam: " << tf_conflict_);
+  }
+  return tf_conflict_;
+}
+
+void EkfSlamRos::diagnoseTf(diagnostic_updater::DiagnosticStatusWrapper& stat) {
+  using diagnostic_msgs::DiagnosticStatus;
+  // From startup on, before there is anything to broadcast: the frame the node will move.
+  const NodeOptions& o = processor_->params().node;
+  const std::string child =
+      o.publish_tf == TfMode::kOdom && !o.base_frame.empty() ? o.base_frame : processor_->bodyFrame();
+  if (!child.empty()) tfConflict(processor_->outputFrames().fixedFrame(), child);
+  if (!tf_conflict_.empty()) {
+    stat.summary(DiagnosticStatus::ERROR, tf_conflict_);
+  } else if (tf_sent_) {
+    stat.summary(DiagnosticStatus::OK, "broadcasting");
+  } else {
+    stat.summary(DiagnosticStatus::OK, "nothing to broadcast yet (not initialized)");
   }
 }
 

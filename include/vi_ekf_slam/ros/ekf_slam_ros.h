@@ -46,6 +46,10 @@ class EkfSlamRos : public OutputSink {
   image_transport::TransportHints imageTransportHints() const;
   void diagnoseInputs(diagnostic_updater::DiagnosticStatusWrapper& stat);
   void diagnoseFilter(diagnostic_updater::DiagnosticStatusWrapper& stat);
+  void diagnoseTf(diagnostic_updater::DiagnosticStatusWrapper& stat);
+  /// "" or why parent -> child is not broadcast: before the node's first broadcast, `child`
+  /// already had another parent on TF (a driver's or URDF's tree; a frame has one parent).
+  const std::string& tfConflict(const std::string& parent, const std::string& child);
 
   std::mutex mutex_;  ///< serializes callbacks (a nodelet manager may run them on several threads)
   // The input rates' diagnostics (WARN below min_imu_rate_hz / min_image_rate_hz); the bounds
@@ -57,6 +61,8 @@ class EkfSlamRos : public OutputSink {
   tf2_ros::Buffer tf_buffer_;
   std::unique_ptr<tf2_ros::TransformListener> tf_listener_;
   tf2_ros::TransformBroadcaster tf_broadcaster_;
+  bool tf_sent_ = false;     ///< the node has broadcast its transform (its child's parent is then its own)
+  std::string tf_conflict_;  ///< see tfConflict()
   tf2_ros::StaticTransformBroadcaster static_broadcaster_;  ///< map_frame -> odom_frame
   std::unique_ptr<EkfSlamProcessor> processor_;
   image_transport::ImageTransport it_;
