@@ -15,6 +15,7 @@
 #include <ros/package.h>
 #include <sstream>
 
+#include "vi_ekf_slam/eval/datasets.h"
 #include "vi_ekf_slam/eval/reference_comparison.h"
 #include "vi_ekf_slam/eval/run_evaluation.h"
 #include "vi_ekf_slam/eval/run_health.h"
@@ -88,7 +89,8 @@ void parseArguments(int argc, char** argv, Options* o) {
       "no-plots", po::bool_switch(&no_plots), "skip the plots of plot_run.py")(
       "segments", po::bool_switch(&o->segments),
       "also <run>_segment_<k>.tum: the poses after the k-th reset in the filter's own world")(
-      "reference", po::value(&o->references)->composing(), "a TUM trajectory to compare with (repeatable)")(
+      "reference", po::value(&o->references)->composing(),
+      "a trajectory to compare with: TUM, or EuRoC's state_groundtruth_estimate0/data.csv (repeatable)")(
       "reference-alignment", po::value(&o->reference_alignment)->composing(),
       "sim3 | se3 | posyaw: once for all references or once per reference (default sim3)")(
       "reference-frame", po::value(&o->reference_frame)->composing(),
@@ -133,7 +135,7 @@ std::vector<Reference> readReferences(const Options& o) {
     r.from_s = std::strtod(from.c_str(), &end);
     if (from.empty() || *end != '\0' || !std::isfinite(r.from_s) || r.from_s < 0.0)
       throw std::runtime_error("--reference-from-s takes seconds >= 0");
-    r.poses = eval::readTum(r.path);
+    r.poses = eval::readTrajectoryFile(r.path);  // TUM, or EuRoC's ground-truth CSV
     refs.push_back(std::move(r));
   }
   return refs;
@@ -191,6 +193,7 @@ nlohmann::ordered_json compareRun(const glue::RecordingSink& sink, const glue::I
     const eval::ReferenceComparison c = eval::compareWithReference(view, ref.poses, ref.alignment);
     j.update({{"matched", c.matched},
               {"position_rmse_m", c.position_rmse_m},
+              {"position_rmse_reference_units", c.position_rmse_reference_units},
               {"rotation_rmse_deg", c.rotation_rmse_deg},
               {"scale_reference_units_per_m", c.scale},
               {"estimate_path_m", c.estimate_path_m},
@@ -198,10 +201,11 @@ nlohmann::ordered_json compareRun(const glue::RecordingSink& sink, const glue::I
     char from_text[48] = "";
     if (ref.from_s > 0.0) std::snprintf(from_text, sizeof(from_text), ", from %g s", ref.from_s);
     std::printf(
-        "  against %s (%s, %s poses, %s clock%s): %d matched, position RMSE %.3f m, rotation RMSE %.2f deg, "
-        "scale %.3f reference units per metre, path %.2f m (reference %.2f m)\n",
+        "  against %s (%s, %s poses, %s clock%s): %d matched, position RMSE %.3f m (%.3f reference units, as "
+        "evo_ape), rotation RMSE %.2f deg, scale %.3f reference units per metre, path %.2f m (reference %.2f m)\n",
         ref.path.c_str(), eval::toString(c.alignment).c_str(), ref.frame.c_str(), ref.clock.c_str(), from_text,
-        c.matched, c.position_rmse_m, c.rotation_rmse_deg, c.scale, c.estimate_path_m, c.reference_path_m);
+        c.matched, c.position_rmse_m, c.position_rmse_reference_units, c.rotation_rmse_deg, c.scale, c.estimate_path_m,
+        c.reference_path_m);
     std::ofstream rc(csv);
     rc << "t,ex,ey,ez,rx,ry,rz\n" << std::setprecision(12);
     for (size_t i = 0; i < c.t.size(); ++i) {
@@ -254,9 +258,10 @@ void runOne(const Options& o, const std::string& mechanization, const glue::Inpu
   fs::create_directories(o.out);
   std::vector<eval::StampedPose> traj;
   for (const auto& p : sink.poses) traj.push_back({p.t, p.p, p.q, p.cov});
-  eval::writeTum(
-      o.out + "/" + name + ".tum", traj,
-      "t x y z qx qy qz qw (body in the continuous odom frame, IMU clock; resets in " + name + "_events.csv)");
+  eval::writeTum(o.out + "/" + name + ".tum", traj,
+                 "t x y z qx qy qz qw (body in the continuous odom frame, IMU clock; resets in " + name +
+                     "_events.csv, covariances in " + name + "_covariance.txt)");
+  eval::writePoseCovariances(o.out + "/" + name + "_covariance.txt", traj);
   writeEvents(o.out + "/" + name + "_events.csv", sink);
   for (size_t k = 0; k < sink.segments.size(); ++k) {
     eval::writeTum(o.out + "/" + name + "_segment_" + std::to_string(k) + ".tum", sink.segments[k],

@@ -182,8 +182,9 @@ std::vector<StampedPose> readTrajectoryFile(const std::string& path) {
   std::string line;
   while (std::getline(in, line)) {
     if (line.empty()) continue;
-    // ASL ground truth: comma separated, nanosecond stamps.
-    if (line.find(',') != std::string::npos) return toStampedPoses(readAslGroundTruth(path));
+    // ASL (EuRoC) ground truth, state_groundtruth_estimate0/data.csv: 17 comma-separated columns,
+    // nanosecond stamps, its header a comment too. A comma-separated TUM file has 8.
+    if (std::count(line.begin(), line.end(), ',') >= 16) return toStampedPoses(readAslGroundTruth(path));
     if (line[0] != '#') break;
   }
   return readTum(path);

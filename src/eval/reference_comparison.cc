@@ -70,36 +70,40 @@ ReferenceComparison compareWithReference(const std::vector<StampedPose>& estimat
     throw std::invalid_argument("compareWithReference: only " + std::to_string(out.matched) +
                                 " estimates fall inside the reference's time span");
   }
-  // The reference is mapped onto the estimate: p_est ~ c R p_ref + t, so residuals are metres.
+  // As evo aligns (`evo_ape --align [--correct_scale]`): the estimate onto the reference,
+  // p_ref ~ c R p_est + t; the residuals are in the reference's units, and in the estimate's metres
+  // once divided by c (the reference units per metre).
   Mat3 R = Mat3::Identity();
   Vec3 t = Vec3::Zero();
   double c = 1.0;
   if (alignment == Alignment::kPosYaw) {
-    const YawTranslation fit = alignPosYaw(p_ref, out.estimate);
+    const YawTranslation fit = alignPosYaw(out.estimate, p_ref);
     R = Eigen::AngleAxisd(fit.yaw, Vec3::UnitZ()).toRotationMatrix();
     t = fit.t;
   } else {
     Eigen::Matrix3Xd src(3, out.matched), dst(3, out.matched);
     for (int i = 0; i < out.matched; ++i) {
-      src.col(i) = p_ref[static_cast<size_t>(i)];
-      dst.col(i) = out.estimate[static_cast<size_t>(i)];
+      src.col(i) = out.estimate[static_cast<size_t>(i)];
+      dst.col(i) = p_ref[static_cast<size_t>(i)];
     }
     const Eigen::Matrix4d T = Eigen::umeyama(src, dst, alignment == Alignment::kSim3);
     c = T.block<3, 1>(0, 0).norm();
     R = T.topLeftCorner<3, 3>() / c;
     t = T.topRightCorner<3, 1>();
   }
-  out.scale = 1.0 / c;
+  out.scale = c;
   std::vector<Vec3> e_p;
   std::vector<double> e_q;
   for (int i = 0; i < out.matched; ++i) {
     const size_t k = static_cast<size_t>(i);
-    out.reference.push_back(c * R * p_ref[k] + t);
-    e_p.push_back(out.reference.back() - out.estimate[k]);
-    const Quat q_aligned = Quat(R) * q_ref[k];
-    e_q.push_back(orientationError(q_aligned, q_est[k]).norm() * 180.0 / M_PI);
+    e_p.push_back(p_ref[k] - (c * R * out.estimate[k] + t));
+    // The reference in the estimate's frame and metres, for plots beside the estimate.
+    out.reference.push_back(R.transpose() * (p_ref[k] - t) / c);
+    const Quat q_aligned = Quat(R) * q_est[k];
+    e_q.push_back(orientationError(q_ref[k], q_aligned).norm() * 180.0 / M_PI);
   }
-  out.position_rmse_m = rms(e_p);
+  out.position_rmse_reference_units = rms(e_p);
+  out.position_rmse_m = out.position_rmse_reference_units / c;
   out.rotation_rmse_deg = rms(e_q);
   out.estimate_path_m = pathLength(out.estimate);
   out.reference_path_m = pathLength(out.reference);

@@ -35,7 +35,7 @@ std::vector<StampedPose> readTum(const std::string& path) {
         fail("'" + tok + "' is not a number");
       }
     }
-    if (v.size() != 8 && v.size() != 29) fail(std::to_string(v.size()) + " columns");
+    if (v.size() != 8) fail(std::to_string(v.size()) + " columns");
     for (double x : v) {
       if (!std::isfinite(x)) fail("non-finite value");
     }
@@ -47,13 +47,6 @@ std::vector<StampedPose> readTum(const std::string& path) {
     p.q = Quat(v[7], v[4], v[5], v[6]);
     if (p.q.norm() < 1e-6) fail("zero quaternion");
     p.q.normalize();
-    if (v.size() == 29) {
-      Eigen::Matrix<double, 6, 6> c;
-      int k = 8;
-      for (int i = 0; i < 6; ++i)
-        for (int j = i; j < 6; ++j) c(i, j) = c(j, i) = v[static_cast<size_t>(k++)];
-      p.cov = c;
-    }
     if (!out.empty() && p.t == out.back().t) {
       // Some exporters write a pose twice; the same pose again carries nothing, another pose at
       // the same time is a contradiction.
@@ -69,22 +62,54 @@ std::vector<StampedPose> readTum(const std::string& path) {
 void writeTum(const std::string& path, const std::vector<StampedPose>& poses, const std::string& header) {
   std::ofstream out(path);
   if (!out) throw std::runtime_error("cannot write '" + path + "'");
-  bool with_cov = !poses.empty();
-  for (const auto& p : poses) with_cov = with_cov && p.cov.has_value();
-  out << "# " << (header.empty() ? "t x y z qx qy qz qw" : header);
-  if (with_cov) out << " + upper triangle of the 6x6 [position, orientation] covariance";
-  out << "\n" << std::setprecision(9) << std::fixed;
+  out << "# " << (header.empty() ? "t x y z qx qy qz qw" : header) << "\n" << std::setprecision(9) << std::fixed;
   for (const auto& p : poses) {
     out << p.t << " " << p.p.x() << " " << p.p.y() << " " << p.p.z() << " " << p.q.x() << " " << p.q.y() << " "
-        << p.q.z() << " " << p.q.w();
-    if (with_cov) {
-      out << std::scientific << std::setprecision(6);
-      for (int i = 0; i < 6; ++i)
-        for (int j = i; j < 6; ++j) out << " " << (*p.cov)(i, j);
-      out << std::fixed << std::setprecision(9);
-    }
+        << p.q.z() << " " << p.q.w() << "\n";
+  }
+}
+
+void writePoseCovariances(const std::string& path, const std::vector<StampedPose>& poses) {
+  std::ofstream out(path);
+  if (!out) throw std::runtime_error("cannot write '" + path + "'");
+  out << "# t, then the upper triangle of the 6x6 pose covariance row by row: [position [m], orientation [rad] "
+         "(about the world axes)], 21 numbers\n";
+  for (const auto& p : poses) {
+    if (!p.cov) continue;
+    out << std::fixed << std::setprecision(9) << p.t << std::scientific << std::setprecision(9);
+    for (int i = 0; i < 6; ++i)
+      for (int j = i; j < 6; ++j) out << " " << (*p.cov)(i, j);
     out << "\n";
   }
+}
+
+int readPoseCovariances(const std::string& path, std::vector<StampedPose>* poses) {
+  std::ifstream in(path);
+  if (!in) throw std::runtime_error("cannot open covariance file '" + path + "'");
+  std::string line;
+  int line_no = 0, matched = 0;
+  while (std::getline(in, line)) {
+    ++line_no;
+    if (line.empty() || line[0] == '#') continue;
+    std::istringstream ss(line);
+    std::vector<double> v;
+    double x;
+    while (ss >> x) v.push_back(x);
+    if (v.size() != 22 || !ss.eof()) {
+      throw std::runtime_error(path + ":" + std::to_string(line_no) + ": expected t and 21 numbers");
+    }
+    Eigen::Matrix<double, 6, 6> c;
+    int k = 1;
+    for (int i = 0; i < 6; ++i)
+      for (int j = i; j < 6; ++j) c(i, j) = c(j, i) = v[static_cast<size_t>(k++)];
+    auto it = std::lower_bound(poses->begin(), poses->end(), v[0] - 1e-6,
+                               [](const StampedPose& p, double t) { return p.t < t; });
+    if (it != poses->end() && std::abs(it->t - v[0]) < 1e-6) {
+      it->cov = c;
+      ++matched;
+    }
+  }
+  return matched;
 }
 
 std::optional<StampedPose> interpolatePose(const std::vector<StampedPose>& poses, double t, double max_gap_s) {

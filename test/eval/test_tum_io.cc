@@ -2,11 +2,15 @@
 // DATA_DIR/trajectories, so the reader takes the common variants and names what it refuses.
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <cstdio>
+#include <limits>
+#include <vector>
 #include <fstream>
 #include <stdexcept>
 #include <string>
 
+#include "../evo_tum_rules.h"
 #include "vi_ekf_slam/eval/tum_io.h"
 
 using namespace vi_ekf_slam;
@@ -67,4 +71,50 @@ TEST(TumIo, ContradictionsAreRefusedWithTheirLine) {
   EXPECT_NE(nanoseconds.find(":1: the time looks like nanoseconds"), std::string::npos) << nanoseconds;
   const std::string word = errorOf(writeFile("word", "10.0 1 2 3 0 0 zero 1\n"));
   EXPECT_NE(word.find("'zero' is not a number"), std::string::npos) << word;
+}
+
+namespace {
+
+std::vector<eval::StampedPose> someTrajectoryWithCovariances() {
+  std::vector<eval::StampedPose> poses;
+  for (int i = 0; i < 5; ++i) {
+    eval::StampedPose p;
+    p.t = 1650458716.848713 + 0.05 * i;
+    p.p = Vec3(0.1 * i, -0.2 * i, 1e-7 * i);
+    p.q = Quat(Eigen::AngleAxisd(0.3 * i, Vec3(1, 2, 3).normalized()));
+    Eigen::Matrix<double, 6, 6> A = Eigen::Matrix<double, 6, 6>::Random();
+    p.cov = A * A.transpose() * 1e-4 + Eigen::Matrix<double, 6, 6>::Identity() * 1e-6;
+    poses.push_back(p);
+  }
+  return poses;
+}
+
+}  // namespace
+
+// The trajectories we write are read by evo (and ov_eval, rpg_trajectory_evaluation): 8 columns;
+// the covariances travel in their own file and come back as written.
+TEST(TumIo, WrittenTrajectoriesPassEvosRulesAndTheCovariancesComeBack) {
+  const std::vector<eval::StampedPose> poses = someTrajectoryWithCovariances();
+  const std::string tum = "/tmp/vi_ekf_slam_tum_io_written.tum";
+  const std::string cov = "/tmp/vi_ekf_slam_tum_io_written_covariance.txt";
+  eval::writeTum(tum, poses, "t x y z qx qy qz qw (a header)");
+  eval::writePoseCovariances(cov, poses);
+  EXPECT_EQ(test::evoStrictTumProblem(tum), "");
+  std::vector<eval::StampedPose> back = eval::readTum(tum);
+  ASSERT_EQ(back.size(), poses.size());
+  EXPECT_EQ(eval::readPoseCovariances(cov, &back), static_cast<int>(poses.size()));
+  for (size_t i = 0; i < poses.size(); ++i) {
+    EXPECT_NEAR(back[i].t, poses[i].t, 1e-9);
+    EXPECT_LT((back[i].p - poses[i].p).norm(), 1e-8);
+    ASSERT_TRUE(back[i].cov);
+    EXPECT_LT(((*back[i].cov) - (*poses[i].cov)).norm(), 1e-9 * poses[i].cov->norm());
+  }
+  // The strict reader is strict: a trailing space, a 29-column line, two spaces.
+  EXPECT_NE(test::evoStrictTumProblem(writeFile("trailing", "10.0 1 2 3 0 0 0 1 \n")), "");
+  EXPECT_NE(test::evoStrictTumProblem(writeFile("double_space", "10.0  1 2 3 0 0 0 1\n")), "");
+  std::string wide = "10.0 1 2 3 0 0 0 1";
+  for (int i = 0; i < 21; ++i) wide += " 0.1";
+  EXPECT_NE(test::evoStrictTumProblem(writeFile("wide", wide + "\n")), "");
+  // ... and so is ours: a 29-column line is not a trajectory.
+  EXPECT_NE(errorOf(writeFile("wide", wide + "\n")).find("29 columns"), std::string::npos);
 }

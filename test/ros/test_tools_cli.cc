@@ -2,6 +2,9 @@
 // (exit 2), instead of starting a long run or ending in an uncaught std::stod.
 #include <cv_bridge/cv_bridge.h>
 #include <gtest/gtest.h>
+
+#include "../evo_tum_rules.h"
+#include "vi_ekf_slam/eval/tum_io.h"
 #include <rosbag/bag.h>
 #include <rosbag/view.h>
 #include <sensor_msgs/CompressedImage.h>
@@ -22,6 +25,7 @@
 #include <cmath>
 #include <cstdio>
 #include <fstream>
+#include <iomanip>
 #include <sstream>
 #include <string>
 #include <utility>
@@ -124,7 +128,7 @@ TEST(ToolsCli, RunBagPicksTopicsAndReadsCompressedImages) {
   EXPECT_EQ(rig.code, 0) << rig.output;
   EXPECT_NE(rig.output.find("world_centric: "), std::string::npos) << rig.output;
   const Outcome typo = run(base + " --imu-topic /imu/data --param max_landmark=120");
-  EXPECT_EQ(typo.code, 1) << typo.output;
+  EXPECT_EQ(typo.code, 2) << typo.output;  // the command line does not fit
   EXPECT_NE(typo.output.find("max_landmarks"), std::string::npos) << typo.output;
   // A reference trusted only from some seconds on (--reference-from-s): the run's own trajectory
   // as the reference, whole and from 4 s of the 8 s bag on (poses from 1 s, after the static start):
@@ -146,6 +150,28 @@ TEST(ToolsCli, RunBagPicksTopicsAndReadsCompressedImages) {
   EXPECT_LT(refs_json[1]["position_rmse_m"].get<double>(), 1e-6) << refs_json.dump();
   EXPECT_NE(refs.output.find("imu clock, from 4 s): " + std::to_string(from_4) + " matched"), std::string::npos)
       << refs.output;
+  // The trajectory is a TUM file evo reads, its covariances beside it, one per pose.
+  EXPECT_EQ(vi_ekf_slam::test::evoStrictTumProblem(dir + "/out/world_centric.tum"), "");
+  std::vector<vi_ekf_slam::eval::StampedPose> written = vi_ekf_slam::eval::readTum(dir + "/out/world_centric.tum");
+  EXPECT_EQ(vi_ekf_slam::eval::readPoseCovariances(dir + "/out/world_centric_covariance.txt", &written),
+            static_cast<int>(written.size()));
+  // EuRoC's ground-truth CSV is a reference too: the run's own trajectory written that way.
+  {
+    std::ofstream csv(dir + "/own.csv");
+    csv << "#timestamp,p_RS_R_x [m],p_RS_R_y [m],p_RS_R_z [m],q_RS_w [],q_RS_x [],q_RS_y [],q_RS_z "
+           "[],v,v,v,b,b,b,b,b,b\n";
+    for (const auto& p : written) {
+      csv << std::llround(p.t * 1e9) << std::setprecision(12) << "," << p.p.x() << "," << p.p.y() << "," << p.p.z()
+          << "," << p.q.w() << "," << p.q.x() << "," << p.q.y() << "," << p.q.z() << ",0,0,0,0,0,0,0,0,0\n";
+    }
+  }
+  const Outcome euroc = run(base + " --imu-topic /imu/data --rig " + dir +
+                            "/rig.yaml --mechanization world_centric --reference " + dir + "/own.csv");
+  EXPECT_EQ(euroc.code, 0) << euroc.output;
+  const nlohmann::json euroc_json =
+      nlohmann::json::parse(std::ifstream(dir + "/out/health.json"))["runs"]["world_centric"]["references"][0];
+  EXPECT_EQ(euroc_json["matched"], whole) << euroc_json.dump();
+  EXPECT_LT(euroc_json["position_rmse_m"].get<double>(), 1e-6) << euroc_json.dump();
   const Outcome negative = run(base + " --imu-topic /imu/data --reference " + own + " --reference-from-s -1");
   EXPECT_EQ(negative.code, 2) << negative.output;
   EXPECT_NE(negative.output.find("--reference-from-s"), std::string::npos) << negative.output;

@@ -50,7 +50,8 @@ struct AslState {
 std::vector<AslState> readAslGroundTruth(const std::string& csv);
 std::vector<StampedPose> toStampedPoses(const std::vector<AslState>& states);
 
-/// Trajectory file in either TUM or ASL ground-truth format (detected from the content).
+/// Trajectory file in either TUM or ASL (EuRoC) ground-truth CSV format (detected from the
+/// content: 17 comma-separated columns with nanosecond stamps).
 std::vector<StampedPose> readTrajectoryFile(const std::string& path);
 
 /// The EqVIO CSV (see ../shared/data/euroc_v1_01_features/README.md): IMU rows, per-frame

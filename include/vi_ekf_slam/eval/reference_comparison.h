@@ -1,8 +1,8 @@
 // Comparison of an estimated trajectory with a reference trajectory of unknown frame (and, for
-// vision-only references, unknown scale), as users do with `evo_ape --align [--correct_scale]`:
-// the reference is interpolated at the estimate's stamps, aligned onto the estimate by Umeyama
-// (Eigen::umeyama) with SE(3), Sim(3) or position + yaw, and the residuals are measured in the
-// estimate's metres.
+// vision-only references, unknown scale), as `evo_ape --align [--correct_scale]` does: the
+// reference is interpolated at the estimate's stamps, the estimate is aligned onto the reference by
+// Umeyama (Eigen::umeyama) with SE(3), Sim(3) or position + yaw, and the residuals are measured in
+// the reference's units (evo's number) and in the estimate's metres.
 #pragma once
 
 #include <optional>
@@ -20,15 +20,16 @@ std::string toString(Alignment a);
 
 struct ReferenceComparison {
   Alignment alignment = Alignment::kSim3;
-  int matched = 0;                 ///< estimates with a reference pose interpolated at their stamp
-  double position_rmse_m = 0.0;    ///< after alignment, in the estimate's metres
-  double rotation_rmse_deg = 0.0;  ///< of the aligned orientations
-  double scale = 1.0;              ///< reference units per metre of the estimate (1 unless Sim(3))
-  double estimate_path_m = 0.0;    ///< path length of the matched estimates [m]
-  double reference_path_m = 0.0;   ///< of the matched reference poses, in the estimate's metres
-  std::vector<double> t;           ///< stamps of the matched estimates
-  std::vector<Vec3> estimate;      ///< matched estimated positions
-  std::vector<Vec3> reference;     ///< the reference positions aligned onto the estimate
+  int matched = 0;                             ///< estimates with a reference pose interpolated at their stamp
+  double position_rmse_m = 0.0;                ///< after alignment, in the estimate's metres
+  double position_rmse_reference_units = 0.0;  ///< the same in the reference's units (evo_ape's APE)
+  double rotation_rmse_deg = 0.0;              ///< of the aligned orientations
+  double scale = 1.0;                          ///< reference units per metre of the estimate (1 unless Sim(3))
+  double estimate_path_m = 0.0;                ///< path length of the matched estimates [m]
+  double reference_path_m = 0.0;               ///< of the matched reference poses, in the estimate's metres
+  std::vector<double> t;                       ///< stamps of the matched estimates
+  std::vector<Vec3> estimate;                  ///< matched estimated positions
+  std::vector<Vec3> reference;                 ///< the reference positions in the estimate's frame and metres
 };
 
 /// The estimate as a reference of another frame or clock sees it: body poses moved to the camera
@@ -39,7 +40,8 @@ std::vector<StampedPose> referenceView(const std::vector<StampedPose>& body_pose
                                        const std::vector<double>* time_offsets_s = nullptr);
 
 /// Interpolates `reference` (sorted by time) at each estimate stamp (linear position, slerp),
-/// where the two reference poses around it are at most max_gap_s apart, aligns and measures.
+/// where the two reference poses around it are at most max_gap_s apart, aligns the estimate onto
+/// it and measures.
 /// Throws std::invalid_argument with fewer than three matches.
 ReferenceComparison compareWithReference(const std::vector<StampedPose>& estimate,
                                          const std::vector<StampedPose>& reference, Alignment alignment,
