@@ -16,6 +16,7 @@
 #include <sstream>
 
 #include "vi_ekf_slam/eval/datasets.h"
+#include "vi_ekf_slam/eval/progress.h"
 #include "vi_ekf_slam/eval/reference_comparison.h"
 #include "vi_ekf_slam/eval/run_evaluation.h"
 #include "vi_ekf_slam/eval/run_health.h"
@@ -253,7 +254,10 @@ void runOne(const Options& o, const std::string& mechanization, const glue::Inpu
   tf2::BufferCore tf;
   glue::EkfSlamProcessor processor(params, sink, &tf);
   if (o.segments) sink.processor = &processor;
-  const double wall = glue::replayBag(o.bag, topics, processor, tf);
+  eval::Progress progress(name, info.end - info.start);  // on a terminal only
+  const double wall =
+      glue::replayBag(o.bag, topics, processor, tf, [&](double done, double) { progress.update(done); });
+  progress.finish();
   const double bag_s = info.end - info.start;
   fs::create_directories(o.out);
   std::vector<eval::StampedPose> traj;

@@ -121,11 +121,13 @@ InputTopics chooseInputTopics(const std::string& bag_path, const std::optional<s
 }
 
 double replayBag(const std::string& bag_path, const InputTopics& topics, EkfSlamProcessor& processor,
-                 tf2::BufferCore& tf) {
+                 tf2::BufferCore& tf, const std::function<void(double done_s, double total_s)>& progress) {
   rosbag::Bag bag(bag_path, rosbag::bagmode::Read);
   rosbag::View view(bag);
   const auto tic = std::chrono::steady_clock::now();
+  const double start = view.getBeginTime().toSec(), total = (view.getEndTime() - view.getBeginTime()).toSec();
   for (const rosbag::MessageInstance& msg : view) {
+    if (progress) progress(msg.getTime().toSec() - start, total);
     const std::string& topic = msg.getTopic();
     if (topic == topics.imu) {
       if (auto imu = msg.instantiate<sensor_msgs::Imu>()) processor.imu(*imu);

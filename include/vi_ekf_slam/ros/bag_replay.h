@@ -3,6 +3,7 @@
 // outputs, kept for the evaluation.
 #pragma once
 
+#include <functional>
 #include <map>
 #include <optional>
 #include <string>
@@ -55,9 +56,10 @@ InputTopics chooseInputTopics(const std::string& bag_path, const std::optional<s
                               const InputTopics* preferred = nullptr);
 
 /// Feeds the bag's IMU, images (raw or compressed), camera_info and TF to the processor in bag
-/// order; returns the wall time it took [s].
+/// order; returns the wall time it took [s]. `progress` (if set) is told the seconds of the bag
+/// done and its length after each message.
 double replayBag(const std::string& bag_path, const InputTopics& topics, EkfSlamProcessor& processor,
-                 tf2::BufferCore& tf);
+                 tf2::BufferCore& tf, const std::function<void(double done_s, double total_s)>& progress = {});
 
 /// A recording of the node's outputs (odom, status, landmarks) evaluated against the input bag's
 /// ground truth; *mean_tracks: tracks per image.
