@@ -12,17 +12,17 @@ PKGS=(
   # ROS 1 from Debian (see ../shared/PLATFORM.md)
   ros-base-dev catkin python3-catkin python3-catkin-pkg python3-empy
   libnodeletlib-dev libnodelet-dev libnodeletlib-tools
-  libtf2-ros-dev libtf2-eigen-dev libtf2-geometry-msgs-dev tf2-tools libcamera-calibration-parsers-dev
+  libtf2-ros-dev libtf2-eigen-dev libtf2-msgs-dev tf2-tools libcamera-calibration-parsers-dev
   libcv-bridge-dev libimage-transport-dev librosbag-dev libroslib-dev python3-rosbag
   librostest-dev python3-rostest python3-roslaunch rosbash
   python3-dynamic-reconfigure libdynamic-reconfigure-config-init-mutex-dev
   libstd-srvs-dev libdiagnostic-updater-dev nlohmann-json3-dev libboost-dev libboost-program-options-dev libyaml-cpp-dev
-  ros-sensor-msgs ros-nav-msgs ros-geometry-msgs ros-visualization-msgs ros-std-srvs
+  ros-sensor-msgs ros-nav-msgs ros-geometry-msgs ros-std-srvs
   python3-sensor-msgs python3-nav-msgs python3-geometry-msgs python3-std-msgs python3-tf2-msgs python3-tf2-ros
-  python3-diagnostic-msgs python3-rostopic python3-rosnode python3-rospy python3-rosservice
-  # tools, plots, screenshots, lint
+  python3-diagnostic-msgs python3-rospy python3-rosgraph python3-rospkg
+  # tools, plots (python3-yaml: dynamic_reconfigure's dynparam, used by the demo), screenshots, lint
   python3-opencv python3-numpy python3-matplotlib python3-yaml
-  rviz xvfb x11-apps imagemagick catkin-lint clang-format clang-tidy pyflakes3 strace
+  rviz xvfb imagemagick catkin-lint clang-format clang-tidy pyflakes3 strace
 )
 
 missing=()
