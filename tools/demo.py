@@ -36,7 +36,8 @@ def replay(bag, mech, out, config, rviz, rate, log, start=0.0):
         os.remove(rec + ".bag")
     launch = subprocess.Popen(
         ["roslaunch", "-p", str(port), "vi_ekf_slam", "replay.launch", "bag:=" + bag, "config:=" + config,
-         "delay:=8", "rate:=%g" % rate, "start:=%g" % start, "record:=" + rec, "rviz:=%s" % ("true" if rviz else "false")],
+         "delay:=8", "rate:=%g" % rate, "start:=%g" % start, "record:=" + rec, "rviz:=%s" % ("true" if rviz else "false"),
+         "rviz_config:=hallway_demo.rviz", "follow:=false"],
         env=env, stdout=log, stderr=subprocess.STDOUT)
     # Switch the running filter to this mechanization before the bag starts (delay above).
     deadline = time.time() + 40

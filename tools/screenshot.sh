@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# make screenshot: replays BAG with rviz (rviz/vi_ekf_slam.rviz) under Xvfb and saves a picture
+# make screenshot: replays BAG with rviz (the demo's view, rviz/hallway_demo.rviz) under Xvfb and saves a picture
 # AT seconds into the replay, then checks it shows the path, the landmark cloud and the tracks.
 #   tools/screenshot.sh [BAG] [OUT.png] [AT_SECONDS]
 set -euo pipefail
@@ -18,7 +18,7 @@ port=$(python3 -c 'import socket; s=socket.socket(); s.bind(("",0)); print(s.get
 export ROS_MASTER_URI=http://localhost:$port
 cleanup() { kill -INT "${launch:-0}" 2>/dev/null || true; wait "${launch:-0}" 2>/dev/null || true; kill "$xvfb" 2>/dev/null || true; }
 trap cleanup EXIT
-stdbuf -oL roslaunch -p "$port" vi_ekf_slam replay.launch bag:="$BAG" rviz:=true delay:=5 keep_alive:=true \
+stdbuf -oL roslaunch -p "$port" vi_ekf_slam replay.launch bag:="$BAG" rviz:=true rviz_config:=hallway_demo.rviz follow:=false delay:=5 keep_alive:=true \
   config:="$(rospack find vi_ekf_slam)/config/sim_hallway.yaml" > "$scratch/roslaunch.log" 2>&1 &
 launch=$!
 sleep $((5 + 4 + AT))             # delay + startup + replay time
