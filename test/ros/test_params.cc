@@ -162,8 +162,8 @@ TEST(Params, ReconfigureGoesBothWaysAndRefusesWhatLoadingRefuses) {
 
 TEST(Params, EveryShippedParameterFileLoads) {
   // Rig and data set files go on top of the defaults, as run_bag rig:= and the launch files do.
-  for (const std::string f :
-       {"config/euroc.yaml", "config/sim_hallway.yaml", "config/rigs/dmvio_handheld.yaml", "test/ros/test_config.yaml"}) {
+  for (const std::string f : {"config/euroc.yaml", "config/sim_hallway.yaml", "config/rigs/dmvio_handheld.yaml",
+                              "test/ros/test_config.yaml"}) {
     YamlParams yaml(kDefaults);
     yaml.overlay(YamlParams(std::string(VI_EKF_SLAM_SOURCE_DIR) + "/" + f));
     NodeParams p;
