@@ -43,8 +43,10 @@ inline Eigen::MatrixXd randomSpd(int n, std::mt19937_64& rng, double scale = 1.0
 /// A state with N landmarks in front of the forward camera and a random SPD covariance; odd
 /// landmarks are anchored inverse-depth points (anchor near the current camera), even ones are
 /// Cartesian, so every Jacobian test covers both parameterizations.
-inline FilterState randomState(Mechanization m, int N, std::mt19937_64& rng) {
-  FilterState s(m);
+/// With `extrinsic`, the state estimates the camera-IMU extrinsic: a forward camera a few degrees
+/// and centimetres off.
+inline FilterState randomState(Mechanization m, int N, std::mt19937_64& rng, bool extrinsic = false) {
+  FilterState s(m, extrinsic);
   s.x.p_s_b = randomVec(rng, 2.0);
   s.x.v_s_b = randomVec(rng, 1.5);
   s.x.b_a = randomVec(rng, 0.1);
@@ -55,7 +57,12 @@ inline FilterState randomState(Mechanization m, int N, std::mt19937_64& rng) {
     s.x.p_n_s = randomVec(rng, 3.0);
     s.x.q_n_s = randomQuat(rng);
   }
-  const CameraExtrinsics T = forwardCamera();
+  CameraExtrinsics T = forwardCamera();
+  if (extrinsic) {
+    T.p_b_c += randomVec(rng, 0.03);
+    T.R_b_c = expSO3(randomVec(rng, 0.05)) * T.R_b_c;
+  }
+  s.x.T_b_c = T;
   std::uniform_real_distribution<double> depth(2.0, 10.0), lateral(-0.4, 0.4);
   const int n0 = s.dim();
   Eigen::MatrixXd P = randomSpd(n0, rng, 0.01);

@@ -14,7 +14,8 @@
 namespace vi_ekf_slam {
 
 EkfSlam::EkfSlam(const EkfSlamConfig& config, const CameraModel& camera, const CameraExtrinsics& T_b_c)
-    : config_(config), camera_(camera), T_b_c_(T_b_c), state_(config.mechanization) {
+    : config_(config), camera_(camera), T_b_c_(T_b_c), state_(config.mechanization, config.estimate_extrinsic) {
+  state_.x.T_b_c = T_b_c_;
   const std::string err = config_.validate();
   if (!err.empty()) throw std::invalid_argument("EkfSlamConfig:\n" + err);
   if (!camera_.intrinsics().validate().empty() || camera_.width() <= 0) {
@@ -29,7 +30,8 @@ EkfSlam::EkfSlam(const EkfSlamConfig& config, const CameraModel& camera, const C
 }
 
 void EkfSlam::reset() {
-  state_ = FilterState(config_.mechanization);
+  state_ = FilterState(config_.mechanization, config_.estimate_extrinsic);
+  state_.x.T_b_c = T_b_c_;
   initialized_ = false;
   imu_.clear();
   recent_imu_.clear();
@@ -56,15 +58,17 @@ FilterState EkfSlam::startingState(const NavState& init, const InitialUncertaint
                                    std::optional<double> time_offset_s) const {
   using namespace idx;
   // Start world-centric: the initial pose uncertainty is the registration error in {n}.
-  FilterState s(Mechanization::kWorldCentric);
+  FilterState s(Mechanization::kWorldCentric, config_.estimate_extrinsic);
   s.timestamp = init.timestamp;
+  s.x.T_b_c = T_b_c_;  // the calibration (a restart forgets what was refined)
   s.x.p_s_b = init.p_n_b;
   s.x.v_s_b = init.v_n_b;
   s.x.q_s_b = init.q_n_b.normalized();
   s.x.b_a = init.b_a;
   s.x.b_g = init.b_g;
   s.x.t_d = time_offset_s.value_or(config_.camera_time_offset_s);
-  Eigen::MatrixXd P = Eigen::MatrixXd::Zero(kWorldCentricDim, kWorldCentricDim);
+  const int dim = s.motionDim();
+  Eigen::MatrixXd P = Eigen::MatrixXd::Zero(dim, dim);
   P.block<3, 3>(kP, kP).diagonal().setConstant(u.position_m * u.position_m);
   P.block<3, 3>(kV, kV).diagonal().setConstant(u.velocity_mps * u.velocity_mps);
   P.block<3, 3>(kBa, kBa).diagonal().setConstant(u.accel_bias_mps2 * u.accel_bias_mps2);
@@ -72,6 +76,11 @@ FilterState EkfSlam::startingState(const NavState& init, const InitialUncertaint
       u.yaw_rad * u.yaw_rad;
   P.block<3, 3>(kBg, kBg).diagonal().setConstant(u.gyro_bias_radps * u.gyro_bias_radps);
   P(kTd, kTd) = u.time_offset_s * u.time_offset_s;
+  if (s.estimatesExtrinsic()) {
+    const int e = s.extrinsicIndex();
+    P.block<3, 3>(e, e).diagonal().setConstant(u.extrinsic_translation_m * u.extrinsic_translation_m);
+    P.block<3, 3>(e + 3, e + 3).diagonal().setConstant(u.extrinsic_rotation_rad * u.extrinsic_rotation_rad);
+  }
   if (u.velocity_attitude_accel_bias) {
     // An initializer's [v, psi, b_a] with their correlations; the yaw's variance is the prior's.
     const std::array<int, 3> at{kV, kPsi, kBa};
@@ -86,7 +95,7 @@ FilterState EkfSlam::startingState(const NavState& init, const InitialUncertaint
   // An initializer that knows the velocity relative to its own heading: v_true = R_z(yaw error)
   // (v + dv), so the velocity error gains e_z x v times the yaw error.
   if (u.velocity_relative_to_heading) {
-    Eigen::MatrixXd J = Eigen::MatrixXd::Identity(kWorldCentricDim, kWorldCentricDim);
+    Eigen::MatrixXd J = Eigen::MatrixXd::Identity(dim, dim);
     J.block<3, 1>(kV, kPsi + 2) = Vec3::UnitZ().cross(init.v_n_b);
     P = J * P * J.transpose();
   }
@@ -288,7 +297,7 @@ int EkfSlam::initialize(const DynamicInitResult& aligned, const NavState& regist
     C.block<1, 3>(a, kBg) = aligned.landmark_gyro_bias_covariance.row(ja);
   }
   const int added = static_cast<int>(
-      initializeLandmarksInverseDepthJointly(s, obs, depths, Q, C, camera_, T_b_c_, config_.update.pixel_noise_px)
+      initializeLandmarksInverseDepthJointly(s, obs, depths, Q, C, camera_, s.x.T_b_c, config_.update.pixel_noise_px)
           .size());
   start(std::move(s), aligned.median_depth_m);
   return added;
@@ -308,7 +317,7 @@ EkfSlam::SceneDepth EkfSlam::sceneDepth() const {
     const int c = state_.landmarkIndex(i);
     if (!(state_.covariance()(c + 2, c + 2) < max_var)) continue;
     // The depth the new points are then tied to (initializeLandmarksAtMapDepth), as it reads it.
-    const double rho = inverseDepthInCamera(state_, i, T_b_c_);
+    const double rho = inverseDepthInCamera(state_, i, state_.x.T_b_c);
     if (rho > 0.0 && std::isfinite(1.0 / rho)) depths.emplace_back(1.0 / rho, i);
   }
   if (depths.size() < 10) return out;
@@ -326,14 +335,14 @@ bool EkfSlam::initializeLandmark(const FeatureObservation& obs, double inverse_d
       p.depth_m = config_.landmark_depth_m;
       p.depth_sigma_m = config_.landmark_depth_sigma_m;
       p.pixel_noise_px = config_.update.pixel_noise_px;
-      return initializeLandmarkFixedDepth(state_, obs, camera_, T_b_c_, p);
+      return initializeLandmarkFixedDepth(state_, obs, camera_, state_.x.T_b_c, p);
     }
     case LandmarkInitMethod::kInverseDepth: {
       InverseDepthParams p;
       p.initial_depth_m = inverse_depth_initial_m;
       p.inverse_depth_sigma = config_.inverse_depth_sigma;
       p.pixel_noise_px = config_.update.pixel_noise_px;
-      return initializeLandmarkInverseDepth(state_, obs, camera_, T_b_c_, p);
+      return initializeLandmarkInverseDepth(state_, obs, camera_, state_.x.T_b_c, p);
     }
   }
   return false;
@@ -390,7 +399,7 @@ FrameResult EkfSlam::processFrame(const CameraFrame& camera_frame) {
       config_.zero_velocity.enabled && config_.zero_velocity.defer_landmarks && !seen_moving_ && !at_rest;
   UpdateParams update = config_.update;
   update.gate_probability = r.gate_probability = outlier_watch_.gateProbability(config_.update);
-  r.update = ekfUpdate(state_, known, camera_, T_b_c_, update, last_gyro_ - state_.x.b_g);
+  r.update = ekfUpdate(state_, known, camera_, state_.x.T_b_c, update, last_gyro_ - state_.x.b_g);
   // The gate's watch counts the seconds the camera moved: the images' standing test where it has
   // decided (a crawl's IMU is as quiet as a stand's, its images are not), else the IMU's.
   const bool camera_still = r.stationary.decided ? r.stationary.stationary : at_rest;
@@ -435,7 +444,7 @@ bool EkfSlam::imuAtRestBefore(double t) {
 
 void EkfSlam::detectStanding(const CameraFrame& frame, bool at_rest, FrameResult* r) {
   if (!config_.zero_velocity.enabled) return;
-  const Mat3 R_n_c = (state_.x.q_n_s * state_.x.q_s_b).toRotationMatrix() * T_b_c_.R_b_c;
+  const Mat3 R_n_c = (state_.x.q_n_s * state_.x.q_s_b).toRotationMatrix() * state_.x.T_b_c.R_b_c;
   ExpectedMotion expected;
   expected.v_n_b = state_.x.q_n_s * state_.x.v_s_b;
   expected.scene_depth_m = newLandmarkDepth();
@@ -491,7 +500,7 @@ std::vector<std::int64_t> EkfSlam::addLandmarks(const std::vector<FeatureObserva
     const auto room = static_cast<size_t>(std::max(0, config_.max_landmarks - state_.numLandmarks()));
     const std::vector<FeatureObservation> obs(fresh.begin(), fresh.begin() + std::min(room, fresh.size()));
     for (int k : initializeLandmarksAtMapDepth(state_, obs, scene.landmark, config_.inverse_depth_sigma, camera_,
-                                               T_b_c_, config_.update.pixel_noise_px)) {
+                                               state_.x.T_b_c, config_.update.pixel_noise_px)) {
       added.push_back(obs[static_cast<size_t>(k)].id);
       last_seen_[added.back()] = t;
     }
@@ -526,14 +535,14 @@ void EkfSlam::addLandmarksDelayed(const std::vector<FeatureObservation>& fresh, 
   const bool wait = seen_moving_ || defer;
   const int fill = defer ? 0 : config_.triangulation.min_map_landmarks - (state_.numLandmarks() - delayed_.clones());
   const DelayedLandmarks::Selection sel =
-      delayed_.select(state_, fresh, camera_, T_b_c_, config_.triangulation, pixel_var, config_.update.gate_probability,
+      delayed_.select(state_, fresh, camera_, state_.x.T_b_c, config_.triangulation, pixel_var, config_.update.gate_probability,
                       wait, 1.0 / newLandmarkDepth(), fill, config_.inverse_depth_sigma);
   // The expired (not waiting, or taken by a map short of landmarks) enter at the prior depth.
   const std::vector<FeatureObservation>& at_prior = sel.expired;
   // Room for both and for a clone.
   r->removed_ids = makeRoomInTheMap(t, static_cast<int>(sel.triangulated.size() + at_prior.size()) + 1);
   const int capacity = config_.max_landmarks - state_.numLandmarks();
-  r->new_ids = delayed_.commit(state_, sel, fresh, capacity, T_b_c_, config_.triangulation);
+  r->new_ids = delayed_.commit(state_, sel, fresh, capacity, state_.x.T_b_c, config_.triangulation);
   r->new_triangulated = static_cast<int>(r->new_ids.size());
   for (auto id : r->new_ids) last_seen_[id] = t;
   for (auto id : addLandmarks(at_prior, t)) r->new_ids.push_back(id);

@@ -74,6 +74,8 @@ std::string EkfSlamConfig::validate() const {
   checkRange(err, "initial_sigma_accel_bias_mps2", initial.accel_bias_mps2);
   checkRange(err, "initial_sigma_gyro_bias_radps", initial.gyro_bias_radps);
   checkRange(err, "initial_sigma_time_offset_s", initial.time_offset_s);
+  checkRange(err, "initial_sigma_extrinsic_rotation_rad", initial.extrinsic_rotation_rad);
+  checkRange(err, "initial_sigma_extrinsic_translation_m", initial.extrinsic_translation_m);
   checkRange(err, "camera_time_offset_s", camera_time_offset_s);
   checkRange(err, "zero_velocity_window_s", zero_velocity.window_s);
   checkRange(err, "zero_velocity_still_window_s", zero_velocity.still_window_s);

@@ -15,7 +15,8 @@ namespace vi_ekf_slam {
 namespace {
 struct AcceptedObservation {
   std::int64_t id;
-  int col;  ///< landmark column in the error state
+  int col;            ///< landmark column in the error state
+  int ext_col = -1;   ///< the extrinsic's first column, when the state estimates it
   ObservationJacobians J;
   Eigen::Vector2d H_td;      ///< w.r.t. the time offset: the feature's image velocity [px/s]
   Eigen::Vector2d residual;  ///< measured - h(x) at the current linearization point [px]
@@ -26,6 +27,10 @@ struct AcceptedObservation {
 MeasurementRows rowsOf(const AcceptedObservation& a, double r_var) {
   MeasurementRows m;
   m.blocks = {{idx::kP, a.J.H_p}, {idx::kPsi, a.J.H_psi}, {a.col, a.J.H_l}, {idx::kTd, a.H_td}};
+  if (a.ext_col >= 0) {
+    m.blocks.push_back({a.ext_col, a.J.H_pbc});
+    m.blocks.push_back({a.ext_col + 3, a.J.H_thc});
+  }
   m.residual = a.residual;
   m.noise_var = r_var;
   return m;
@@ -54,10 +59,13 @@ struct ObservationModel {
   /// t_i + t_d_est, so z = h(x) + velocity * (t_d - t_d_est). False if it cannot be predicted.
   bool linearize(const FilterState& state, double dtd, AcceptedObservation* a) const {
     const auto li = state.findLandmark(a->id);
+    // An estimated extrinsic is the iterate's.
+    const CameraExtrinsics& T = state.estimatesExtrinsic() ? state.x.T_b_c : T_b_c;
     Eigen::Vector2d uv;
-    if (!li || !predictObservation(state.x, state.landmark(*li), camera, T_b_c, &uv, &a->J)) return false;
+    if (!li || !predictObservation(state.x, state.landmark(*li), camera, T, &uv, &a->J)) return false;
     a->col = state.landmarkIndex(*li);
-    if (!predictImageVelocity(state.x, state.landmark(*li), camera, T_b_c, omega_b, &a->H_td)) a->H_td.setZero();
+    a->ext_col = state.estimatesExtrinsic() ? state.extrinsicIndex() : -1;
+    if (!predictImageVelocity(state.x, state.landmark(*li), camera, T, omega_b, &a->H_td)) a->H_td.setZero();
     a->residual = a->measured - uv - a->H_td * (rowTime(a->measured.y()) + dtd);
     return true;
   }

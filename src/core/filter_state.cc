@@ -25,12 +25,14 @@ std::optional<Mechanization> mechanizationFromString(const std::string& s) {
   return std::nullopt;
 }
 
-FilterState::FilterState(Mechanization mechanization)
+FilterState::FilterState(Mechanization mechanization, bool extrinsic)
     : mechanization_(mechanization),
-      P_(Eigen::MatrixXd::Zero(vi_ekf_slam::motionDim(mechanization), vi_ekf_slam::motionDim(mechanization))) {}
+      extrinsic_(extrinsic),
+      P_(Eigen::MatrixXd::Zero(vi_ekf_slam::motionDim(mechanization, extrinsic),
+                               vi_ekf_slam::motionDim(mechanization, extrinsic))) {}
 
 void FilterState::setMechanizationTag(Mechanization m) {
-  if (vi_ekf_slam::motionDim(m) != motionDim()) {
+  if (vi_ekf_slam::motionDim(m, extrinsic_) != motionDim()) {
     throw std::logic_error("setMechanizationTag: layout change needs switchMechanization()");
   }
   mechanization_ = m;
@@ -186,6 +188,11 @@ void FilterState::boxplus(const Eigen::VectorXd& dx) {
     x.p_n_s += dx.segment<3>(idx::kPns);
     x.q_n_s = (expQuat(dx.segment<3>(idx::kPsiNs)) * x.q_n_s).normalized();
   }
+  if (extrinsic_) {
+    const int e = extrinsicIndex();
+    x.T_b_c.p_b_c += dx.segment<3>(e);
+    x.T_b_c.R_b_c = (expQuat(dx.segment<3>(e + 3)) * Quat(x.T_b_c.R_b_c)).normalized().toRotationMatrix();
+  }
   for (int i = 0; i < numLandmarks(); ++i) landmarks_[static_cast<size_t>(i)].l += dx.segment<3>(landmarkIndex(i));
 }
 
@@ -204,6 +211,11 @@ Eigen::VectorXd FilterState::boxminus(const FilterState& other) const {
     e.segment<3>(idx::kPns) = x.p_n_s - other.x.p_n_s;
     e.segment<3>(idx::kPsiNs) = rotationError(x.q_n_s, other.x.q_n_s);
   }
+  if (extrinsic_) {
+    const int k = extrinsicIndex();
+    e.segment<3>(k) = x.T_b_c.p_b_c - other.x.T_b_c.p_b_c;
+    e.segment<3>(k + 3) = rotationError(Quat(x.T_b_c.R_b_c), Quat(other.x.T_b_c.R_b_c));
+  }
   for (int i = 0; i < numLandmarks(); ++i) {
     // Compare the points in the other landmark's parameterization (anchors may differ after a
     // frame change of a perturbed state).
@@ -215,7 +227,7 @@ Eigen::VectorXd FilterState::boxminus(const FilterState& other) const {
 
 void FilterState::reset(Mechanization m, const MotionState& xs, std::vector<std::int64_t> ids,
                         std::vector<Landmark> lms, Eigen::MatrixXd P) {
-  const int n = vi_ekf_slam::motionDim(m) + 3 * static_cast<int>(ids.size());
+  const int n = vi_ekf_slam::motionDim(m, extrinsic_) + 3 * static_cast<int>(ids.size());
   if (lms.size() != ids.size() || P.rows() != n || P.cols() != n) {
     throw std::invalid_argument("FilterState::reset: inconsistent sizes");
   }

@@ -73,6 +73,17 @@ std::vector<Landmark> transformLandmarks(const FilterState& s, const Mat3& R, co
   return out;
 }
 
+/// The extrinsic (body-relative) is the same in every strapdown frame: an identity block after the
+/// mechanization's blocks, when the state estimates it.
+void addExtrinsicBlock(const FilterState& s, Eigen::MatrixXd* J_motion) {
+  if (!s.estimatesExtrinsic()) return;
+  const Eigen::Index r = J_motion->rows(), c = J_motion->cols();
+  J_motion->conservativeResize(r + idx::kExtrinsicDim, c + idx::kExtrinsicDim);
+  J_motion->bottomRows(idx::kExtrinsicDim).setZero();
+  J_motion->rightCols(idx::kExtrinsicDim).setZero();
+  J_motion->bottomRightCorner(idx::kExtrinsicDim, idx::kExtrinsicDim).setIdentity();
+}
+
 void checkFinite(const Eigen::MatrixXd& P) {
   if (!P.allFinite()) throw std::runtime_error("frame change produced a non-finite covariance");
 }
@@ -120,6 +131,7 @@ FrameChangeJacobian compositionJacobian(const FilterState& s) {
   J.J_motion.block<3, 3>(kPns, kPsiNs) = -skew(R_n_s * s.x.p_s_b);
   J.J_motion.block<3, 3>(kPsiNs, kPsiNs).setIdentity();
   J.J_motion.block<3, 3>(kPsiNs, kPsi) = R_n_s;
+  addExtrinsicBlock(s, &J.J_motion);
   resetToBodyLandmarks(s, R, &J);
   return J;
 }
@@ -152,6 +164,7 @@ FrameChangeJacobian worldToSensorJacobian(const FilterState& s) {
   J.J_motion(kTd, kTd) = 1.0;
   J.J_motion.block<3, 3>(kPns, kP).setIdentity();      // p_n_s = p_n_b
   J.J_motion.block<3, 3>(kPsiNs, kPsi).setIdentity();  // q_n_s = q_n_b
+  addExtrinsicBlock(s, &J.J_motion);
   resetToBodyLandmarks(s, R, &J);
   return J;
 }
@@ -182,6 +195,7 @@ FrameChangeJacobian sensorToWorldJacobian(const FilterState& s) {
   const Mat3 R_n_s = s.x.q_n_s.toRotationMatrix();
   FrameChangeJacobian J;
   J.J_motion = sensorToWorldMotionJacobian(s.x);
+  addExtrinsicBlock(s, &J.J_motion);
   // Y_n = p_n_s + R_n_s Y_s
   J.pos_col = kPns;
   J.rot_col = kPsiNs;
@@ -220,6 +234,7 @@ void switchMechanization(FilterState& s, Mechanization target) {
   x.b_a = s.x.b_a;
   x.b_g = s.x.b_g;
   x.t_d = s.x.t_d;
+  x.T_b_c = s.x.T_b_c;
   Eigen::MatrixXd Pn = applyFrameChange(s.covariance(), J);
   checkFinite(Pn);
   s.reset(target, x, s.landmarkIds(), std::move(lms), std::move(Pn));

@@ -21,9 +21,9 @@ void strapdownStep(MotionState& x, Mechanization m, const Vec3& wm, const Vec3& 
 }
 
 MotionMatrix transitionMatrix(const MotionState& x, Mechanization m, const Vec3& wm, const Vec3& am, double dt,
-                              const Vec3& g_n) {
+                              const Vec3& g_n, bool extrinsic) {
   using namespace idx;
-  const int n = motionDim(m);
+  const int n = motionDim(m, extrinsic);  // the extrinsic is constant: its block stays identity
   MotionMatrix Phi = MotionMatrix::Identity(n, n);
   const Mat3 R = x.q_s_b.toRotationMatrix();
   const Vec3 f = am - x.b_a;
@@ -53,11 +53,11 @@ MotionMatrix transitionMatrix(const MotionState& x, Mechanization m, const Vec3&
   return Phi;
 }
 
-MotionVector continuousNoiseDiagonal(Mechanization m, const ImuNoiseParams& noise, double dt) {
+MotionVector continuousNoiseDiagonal(Mechanization m, const ImuNoiseParams& noise, double dt, bool extrinsic) {
   using namespace idx;
   // G Q G^T: the noise enters through rotations (C n_a, C n_g) of isotropic white noise, so
   // the rotated blocks stay sigma^2 * I.
-  MotionVector q = MotionVector::Zero(motionDim(m));
+  MotionVector q = MotionVector::Zero(motionDim(m, extrinsic));
   q.segment<3>(kV).setConstant(noise.accel_noise_density * noise.accel_noise_density * dt);
   q.segment<3>(kBa).setConstant(noise.accel_random_walk * noise.accel_random_walk * dt);
   q.segment<3>(kPsi).setConstant(noise.gyro_noise_density * noise.gyro_noise_density * dt);
@@ -65,17 +65,19 @@ MotionVector continuousNoiseDiagonal(Mechanization m, const ImuNoiseParams& nois
   return q;
 }
 
-MotionMatrix discreteNoise(const MotionMatrix& Phi, Mechanization m, const ImuNoiseParams& noise, double dt) {
-  MotionMatrix Qd = Phi * continuousNoiseDiagonal(m, noise, dt).asDiagonal() * Phi.transpose();
+MotionMatrix discreteNoise(const MotionMatrix& Phi, Mechanization m, const ImuNoiseParams& noise, double dt,
+                           bool extrinsic) {
+  MotionMatrix Qd = Phi * continuousNoiseDiagonal(m, noise, dt, extrinsic).asDiagonal() * Phi.transpose();
   return 0.5 * (Qd + Qd.transpose());
 }
 
 void propagateState(FilterState& state, const Vec3& wm, const Vec3& am, double dt, const ImuNoiseParams& noise,
                     const Vec3& g_n) {
   const Mechanization m = state.mechanization();
-  const MotionMatrix Phi = transitionMatrix(state.x, m, wm, am, dt, g_n);
+  const bool e = state.estimatesExtrinsic();
+  const MotionMatrix Phi = transitionMatrix(state.x, m, wm, am, dt, g_n, e);
   strapdownStep(state.x, m, wm, am, dt, g_n);
-  state.propagateCovarianceDiagonalNoise(Phi, continuousNoiseDiagonal(m, noise, dt));
+  state.propagateCovarianceDiagonalNoise(Phi, continuousNoiseDiagonal(m, noise, dt, e));
   state.timestamp += dt;
 }
 

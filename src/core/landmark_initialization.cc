@@ -19,6 +19,8 @@ bool backProject(const MotionState& x, const Eigen::Vector2d& uv, double depth, 
   out->p_s_l = R_s_b * p_b_l + x.p_s_b;
   out->G_p.setIdentity();
   out->G_psi = -skew(R_s_b * p_b_l);  // Exp(psi) R p ~= R p - [R p]x psi
+  out->G_pbc = R_s_b;
+  out->G_thc = -R_s_b * skew(T_b_c.R_b_c * (depth * ray_c));
   out->G_uv = depth * R_s_c.leftCols<2>() * J_xn_uv;
   out->G_depth = R_s_c * ray_c;
   return out->p_s_l.allFinite();
@@ -39,8 +41,22 @@ void appendTransformed(FilterState& state, std::int64_t id, const Landmark& lm, 
   G_x << DG_p, DG_psi;
   const int blocks[2] = {idx::kP, idx::kPsi};
   const Eigen::Matrix<double, 3, 2> DG_uv = D * l.G_uv;
-  const Eigen::Matrix3d P_ll = G_x * gatherBlocks<2>(P, blocks) * G_x.transpose() +
-                               pixel_var * DG_uv * DG_uv.transpose() + l_var * l_dir * l_dir.transpose();
+  Eigen::Matrix3d P_ll;
+  if (state.estimatesExtrinsic()) {
+    // The ray also starts at the estimated camera: the extrinsic's errors move it.
+    const int e = state.extrinsicIndex();
+    const Mat3 DG_pbc = D * l.G_pbc, DG_thc = D * l.G_thc;
+    P_l_state.noalias() += DG_pbc * P.middleRows<3>(e);
+    P_l_state.noalias() += DG_thc * P.middleRows<3>(e + 3);
+    Eigen::Matrix<double, 3, 12> G_xe;
+    G_xe << DG_p, DG_psi, DG_pbc, DG_thc;
+    const int blocks_e[4] = {idx::kP, idx::kPsi, e, e + 3};
+    P_ll = G_xe * gatherBlocks<4>(P, blocks_e) * G_xe.transpose() + pixel_var * DG_uv * DG_uv.transpose() +
+           l_var * l_dir * l_dir.transpose();
+  } else {
+    P_ll = G_x * gatherBlocks<2>(P, blocks) * G_x.transpose() + pixel_var * DG_uv * DG_uv.transpose() +
+           l_var * l_dir * l_dir.transpose();
+  }
   state.appendLandmark(id, lm, P_ll, P_l_state);
 }
 }  // namespace
@@ -117,6 +133,10 @@ std::vector<int> initializeLandmarksInverseDepthJointly(FilterState& state, cons
     const InitializedLandmark& l = rays[static_cast<size_t>(a)];
     A.block<3, 3>(3 * a, idx::kP) = D * l.G_p;
     A.block<3, 3>(3 * a, idx::kPsi) = D * l.G_psi;
+    if (state.estimatesExtrinsic()) {
+      A.block<3, 3>(3 * a, state.extrinsicIndex()) = D * l.G_pbc;
+      A.block<3, 3>(3 * a, state.extrinsicIndex() + 3) = D * l.G_thc;
+    }
     A(3 * a + 2, d0 + a) = 1.0;
     const Eigen::Matrix<double, 3, 2> DG_uv = D * l.G_uv;
     pixel.block<3, 3>(3 * a, 3 * a) = pixel_var * DG_uv * DG_uv.transpose();
@@ -154,6 +174,14 @@ double inverseDepthInCamera(const FilterState& state, int i, const CameraExtrins
     J->segment<3>(idx::kP) = -dz;
     J->segment<3>(idx::kPsi) = dz * skew(p_s_l - state.x.p_s_b);
     J->segment<3>(state.landmarkIndex(i)) = dz * M;
+    if (state.estimatesExtrinsic()) {
+      // p_s_c = p_s_b + R_s_b p_b_c; R_c_s = R_b_c^T (I - [theta]x) R_s_b^T.
+      const int e = state.extrinsicIndex();
+      const Vec3 v = p_s_l - state.x.p_s_b - R_s_b * T_b_c.p_b_c;
+      J->segment<3>(e) = -dz * R_s_b;
+      J->segment<3>(e + 3) = -(1.0 / (z * z)) * Eigen::RowVector3d(T_b_c.R_b_c.col(2).transpose()) *
+                             skew(R_s_b.transpose() * v);
+    }
   }
   return 1.0 / z;
 }

@@ -15,6 +15,7 @@ CameraClone appendCameraClone(FilterState& state, std::int64_t id, const CameraE
   l.p_s_l = state.x.p_s_b + R_s_b * T_b_c.p_b_c;
   l.G_p.setIdentity();
   l.G_psi = -skew(R_s_b * T_b_c.p_b_c);
+  l.G_pbc = R_s_b;  // (its rotation does not move the camera's position)
   l.G_uv.setZero();
   l.G_depth.setZero();
   appendInitializedLandmark(state, id, l, 0.0, 0.0);
@@ -80,6 +81,24 @@ bool triangulateLandmark(const FilterState& state, const CameraClone& clone, con
     direction(11 + k, z, z, clone.R_s_c * Vec3(J0(0, k), J0(1, k), 0.0), z);
   }
 
+  // The extrinsic, when estimated: p_b_c moves the current camera (the clone's position is a state
+  // of its own); R_b_c = Exp(theta) R_b_c turns both rays, the clone's as seen from its body.
+  Eigen::Matrix<double, 3, 6> J_X_ext = Eigen::Matrix<double, 3, 6>::Zero();
+  Eigen::Matrix<double, 1, 6> J_gap_ext = Eigen::Matrix<double, 1, 6>::Zero();
+  if (state.estimatesExtrinsic()) {
+    const Eigen::Matrix<double, 3, 16> J_X_kept = J_X;
+    const Eigen::Matrix<double, 1, 16> J_gap_kept = J_gap;
+    for (int j = 0; j < 3; ++j) {
+      const Vec3 e = Vec3::Unit(j);
+      direction(j, R_s_b * e, z, z, -(R_s_b * e));
+      direction(3 + j, z, R_s_b * e.cross(T_b_c.R_b_c * m1), clone.R_s_c * (T_b_c.R_b_c.transpose() * e).cross(m0), z);
+    }
+    J_X_ext = J_X.leftCols<6>();
+    J_gap_ext = J_gap.leftCols<6>();
+    J_X = J_X_kept;
+    J_gap = J_gap_kept;
+  }
+
   TriangulatedLandmark& t = *out;
   t.landmark.kind = LandmarkKind::kInverseDepth;
   t.landmark.R_s_a = R_s_c;
@@ -94,11 +113,23 @@ bool triangulateLandmark(const FilterState& state, const CameraClone& clone, con
   Eigen::Matrix<double, 7, 7> noise = Eigen::Matrix<double, 7, 7>::Zero();
   noise.topLeftCorner<4, 4>().diagonal().setConstant(pixel_var);
   noise.bottomRightCorner<3, 3>() = clone.rotation_cov;
-  const Mat3 P_from_state = t.J_state * P_x * t.J_state.transpose();
+  Mat3 P_from_state = t.J_state * P_x * t.J_state.transpose();
+  double gap_var = (J_gap.leftCols<9>() * P_x * J_gap.leftCols<9>().transpose() +
+                    J_gap.rightCols<7>() * noise * J_gap.rightCols<7>().transpose())(0, 0);
+  if (state.estimatesExtrinsic()) {
+    const int e = state.extrinsicIndex();
+    const int all[5] = {idx::kP, idx::kPsi, state.landmarkIndex(*ci), e, e + 3};
+    const Eigen::Matrix<double, 15, 15> P_xe = gatherBlocks<5>(state.covariance(), all);
+    t.J_ext = D * J_X_ext;
+    Eigen::Matrix<double, 3, 15> J_se;
+    J_se << t.J_state, t.J_ext;
+    Eigen::Matrix<double, 1, 15> g_se;
+    g_se << J_gap.leftCols<9>(), J_gap_ext;
+    P_from_state = J_se * P_xe * J_se.transpose();
+    gap_var = (g_se * P_xe * g_se.transpose() + J_gap.rightCols<7>() * noise * J_gap.rightCols<7>().transpose())(0, 0);
+  }
   t.P_ll = P_from_state + t.J_noise * noise * t.J_noise.transpose();
   t.baseline_relative_sigma = std::sqrt(std::max(0.0, P_from_state(2, 2))) * d(0);
-  const double gap_var = (J_gap.leftCols<9>() * P_x * J_gap.leftCols<9>().transpose() +
-                          J_gap.rightCols<7>() * noise * J_gap.rightCols<7>().transpose())(0, 0);
   const double g = n.dot(gap);
   t.ray_gap_nis = gap_var > 0.0 ? g * g / gap_var : std::numeric_limits<double>::infinity();
   return t.landmark.l.allFinite() && t.P_ll.allFinite();
@@ -112,6 +143,10 @@ void appendTriangulatedLandmark(FilterState& state, std::int64_t id, const Camer
   P_l_state.noalias() = l.J_state.leftCols<3>() * P.middleRows<3>(idx::kP);
   P_l_state.noalias() += l.J_state.middleCols<3>(3) * P.middleRows<3>(idx::kPsi);
   P_l_state.noalias() += l.J_state.rightCols<3>() * P.middleRows<3>(c);
+  if (state.estimatesExtrinsic()) {
+    P_l_state.noalias() += l.J_ext.leftCols<3>() * P.middleRows<3>(state.extrinsicIndex());
+    P_l_state.noalias() += l.J_ext.rightCols<3>() * P.middleRows<3>(state.extrinsicIndex() + 3);
+  }
   state.appendLandmark(id, l.landmark, l.P_ll, P_l_state);
 }
 

@@ -34,6 +34,10 @@ bool predictObservation(const MotionState& x, const Landmark& lm, const CameraMo
     J->H_l = JR * dq_dl;                                    // J_Y
     J->H_p = -w * JR;                                       // J_p
     J->H_psi = JR * skew(q_s + w * (R_s_b * T_b_c.p_b_c));  // J_psi
+    // The extrinsic: p_s_c = p_s_b + R_s_b p_b_c moves as the body position does, through R_s_b;
+    // with R_b_c = Exp(theta) R_b_c, q_c = R_b_c^T (I - [theta]x) R_s_b^T q_s.
+    J->H_pbc = J->H_p * R_s_b;
+    J->H_thc = J_pi * T_b_c.R_b_c.transpose() * skew(R_s_b.transpose() * q_s);
   }
   return true;
 }

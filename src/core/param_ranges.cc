@@ -80,6 +80,8 @@ const std::map<std::string, ParamRange>& table() {
       {"initial_sigma_accel_bias_mps2", {1e-5, 1.0}},
       {"initial_sigma_gyro_bias_radps", {1e-6, 0.5}},
       {"initial_sigma_time_offset_s", {0.0, 0.5}},
+      {"initial_sigma_extrinsic_rotation_rad", {1e-4, 0.5}},
+      {"initial_sigma_extrinsic_translation_m", {1e-4, 0.5}},
       // lost detection [m/s, ratio, s, count]
       {"lost_max_speed_mps", {0.1, 1000.0}},
       {"lost_max_rejected_fraction", {0.01, 1.0}},

@@ -139,6 +139,9 @@ std::vector<ParamSpec> makeTable() {
                    {{"tf", "TF: IMU frame <- the images' frame_id"}, {"parameters", "T_b_c"}}),
       field("T_b_c", "camera", VI_FIELD(p.node.T_b_c), "",
             "camera pose in the IMU frame: x y z [m] qx qy qz qw (extrinsic_source parameters)"),
+      field("estimate_extrinsic", "camera", VI_FIELD(p.filter.estimate_extrinsic), "",
+            "refine the camera-IMU extrinsic online (rotation and translation in the state; for a rig measured "
+            "with a ruler)"),
       stringChoice("image_transport", "camera", VI_FIELD(p.node.image_transport), "how images arrive",
                    {{"raw", "sensor_msgs/Image"}, {"compressed", "sensor_msgs/CompressedImage on <image>/compressed"}}),
       // --- filter
@@ -306,6 +309,11 @@ std::vector<ParamSpec> makeTable() {
             "initial gyro bias std-dev after the static gyro-bias estimate", false),
       field("initial_sigma_time_offset_s", "initialization", VI_FIELD(p.filter.initial.time_offset_s), "s",
             "camera-IMU time offset std-dev, estimated online (0: fixed at camera_time_offset_s)", false),
+      field("initial_sigma_extrinsic_rotation_rad", "initialization", VI_FIELD(p.filter.initial.extrinsic_rotation_rad),
+            "rad", "camera-IMU rotation std-dev (estimate_extrinsic)", false),
+      field("initial_sigma_extrinsic_translation_m", "initialization",
+            VI_FIELD(p.filter.initial.extrinsic_translation_m), "m",
+            "camera-IMU translation std-dev per axis (estimate_extrinsic)", false),
       // --- lost
       field("lost_detection", "lost", VI_FIELD(p.filter.divergence.enabled), "",
             "detect a lost (diverged) filter, reset it and re-initialize"),

@@ -43,7 +43,10 @@ class EkfSlam {
 
   const EkfSlamConfig& config() const { return config_; }
   const CameraModel& camera() const { return camera_; }
-  const CameraExtrinsics& extrinsics() const { return T_b_c_; }
+  /// The camera-IMU extrinsic in use: the calibration, or its online estimate (estimate_extrinsic).
+  const CameraExtrinsics& extrinsics() const { return state_.x.T_b_c; }
+  /// The calibration the filter was given.
+  const CameraExtrinsics& calibratedExtrinsics() const { return T_b_c_; }
 
   /// Starts the filter at a known pose, velocity and biases in {n} at initial.timestamp; the
   /// covariance comes from config().initial. IMU samples buffered so far are kept.

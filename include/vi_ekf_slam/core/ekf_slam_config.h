@@ -44,6 +44,10 @@ struct InitialUncertainty {
   /// Camera-IMU time offset [s]; 0 keeps camera_time_offset_s fixed. A rig whose camera and
   /// IMU share no hardware clock is off by tens of ms (the hand-held RealSense: 47 ms).
   double time_offset_s = 0.05;
+  /// Camera-IMU extrinsic (EkfSlamConfig::estimate_extrinsic): a transform measured with a ruler
+  /// is off by a few degrees and centimetres.
+  double extrinsic_rotation_rad = 0.05;   ///< ~3 deg
+  double extrinsic_translation_m = 0.03;  ///< per axis
   /// The velocity is known relative to the heading (a dynamic initialization's, whose yaw is
   /// arbitrary): its error in {n} then includes the yaw error's rotation of it, v x yaw_rad.
   /// Without that correlation vision would "observe" the yaw from the velocity.
@@ -65,6 +69,9 @@ struct EkfSlamConfig {
   /// Camera-IMU time offset at the start [s]: t_imu = t_image + t_d. Estimated online from here
   /// when initial.time_offset_s > 0.
   double camera_time_offset_s = 0.0;
+  /// Estimate the camera-IMU extrinsic online (rotation and translation in the state, OpenVINS's
+  /// calib_cam_extrinsics), from the given one with initial.extrinsic_* as its std-devs.
+  bool estimate_extrinsic = false;
   UpdateParams update;  ///< pixel noise [px] and chi^2 gate probability
   LandmarkInitMethod landmark_init = LandmarkInitMethod::kInverseDepth;
   double landmark_depth_m = 8.0;         ///< fixed depth of new landmarks [m]

@@ -9,6 +9,7 @@
 #include <unordered_map>
 #include <vector>
 
+#include "vi_ekf_slam/core/camera_extrinsics.h"
 #include "vi_ekf_slam/core/landmark.h"
 #include "vi_ekf_slam/core/so3.h"
 #include "vi_ekf_slam/core/state_layout.h"
@@ -30,18 +31,25 @@ struct MotionState {
   double t_d = 0.0;           ///< camera-IMU time offset: t_imu = t_image + t_d [s]
   Vec3 p_n_s = Vec3::Zero();  ///< position of {s} in {n} [m]
   Quat q_n_s = Quat::Identity();
+  /// The camera in the body frame: the calibration, refined when the filter estimates it.
+  CameraExtrinsics T_b_c;
 };
 
 class FilterState {
  public:
-  explicit FilterState(Mechanization mechanization = Mechanization::kWorldCentric);
+  /// `extrinsic`: the camera-IMU extrinsic is part of the error state (idx::kExtrinsicDim entries
+  /// at extrinsicIndex()); else x.T_b_c is a constant.
+  explicit FilterState(Mechanization mechanization = Mechanization::kWorldCentric, bool extrinsic = false);
 
   Mechanization mechanization() const { return mechanization_; }
   /// Changes the mechanization tag only between layouts of equal size (the two sensor-centric
   /// variants); a change of layout goes through switchMechanization().
   void setMechanizationTag(Mechanization m);
 
-  int motionDim() const { return vi_ekf_slam::motionDim(mechanization_); }
+  int motionDim() const { return vi_ekf_slam::motionDim(mechanization_, extrinsic_); }
+  bool estimatesExtrinsic() const { return extrinsic_; }
+  /// First row/column of the extrinsic's error (valid when estimatesExtrinsic()).
+  int extrinsicIndex() const { return vi_ekf_slam::extrinsicIndex(mechanization_); }
   int numLandmarks() const { return static_cast<int>(landmark_ids_.size()); }
   int dim() const { return motionDim() + idx::kLandmarkDim * numLandmarks(); }
   /// Row/column of landmark i (by position in the map) in the error state.
@@ -92,7 +100,8 @@ class FilterState {
   /// Error state e such that other.boxplus(e) == *this (same layout and landmark ids).
   Eigen::VectorXd boxminus(const FilterState& other) const;
 
-  /// Replaces nominal state, map and covariance at once (used by the frame changes).
+  /// Replaces nominal state, map and covariance at once (used by the frame changes); the layout
+  /// keeps whether the extrinsic is estimated.
   void reset(Mechanization m, const MotionState& x, std::vector<std::int64_t> ids, std::vector<Landmark> landmarks,
              Eigen::MatrixXd P);
 
@@ -103,6 +112,7 @@ class FilterState {
   void rebuildIndex();
 
   Mechanization mechanization_;
+  bool extrinsic_ = false;
   std::vector<std::int64_t> landmark_ids_;
   std::vector<Landmark> landmarks_;
   std::unordered_map<std::int64_t, int> index_of_id_;

@@ -35,15 +35,17 @@ inline Vec3 gravityInNav(double g_mps2) { return Vec3(0.0, 0.0, g_mps2); }
 /// One strapdown step over dt with the (mean) raw measurements wm [rad/s], am [m/s^2].
 void strapdownStep(MotionState& x, Mechanization m, const Vec3& wm, const Vec3& am, double dt, const Vec3& g_n);
 
-/// Error-state transition matrix of strapdownStep() evaluated at the state before the step.
+/// Error-state transition matrix of strapdownStep() evaluated at the state before the step
+/// (`extrinsic`: the layout carries the camera-IMU extrinsic, a constant).
 MotionMatrix transitionMatrix(const MotionState& x, Mechanization m, const Vec3& wm, const Vec3& am, double dt,
-                              const Vec3& g_n);
+                              const Vec3& g_n, bool extrinsic = false);
 
 /// Diagonal of G Q G^T dt (isotropic noise through rotations stays diagonal), per error state.
-MotionVector continuousNoiseDiagonal(Mechanization m, const ImuNoiseParams& noise, double dt);
+MotionVector continuousNoiseDiagonal(Mechanization m, const ImuNoiseParams& noise, double dt, bool extrinsic = false);
 
 /// Discrete process noise Phi * G Q G^T * Phi^T * dt (paper eq. 18).
-MotionMatrix discreteNoise(const MotionMatrix& Phi, Mechanization m, const ImuNoiseParams& noise, double dt);
+MotionMatrix discreteNoise(const MotionMatrix& Phi, Mechanization m, const ImuNoiseParams& noise, double dt,
+                           bool extrinsic = false);
 
 /// Propagates nominal state and covariance of the filter by one IMU interval.
 void propagateState(FilterState& state, const Vec3& wm, const Vec3& am, double dt, const ImuNoiseParams& noise,

@@ -23,11 +23,14 @@ struct FixedDepthParams {
   double pixel_noise_px = 1.0;  ///< std-dev of the observed pixel [px]
 };
 
-/// Landmark position and its Jacobians w.r.t. body position/orientation error, pixel, depth.
+/// Landmark position and its Jacobians w.r.t. body position/orientation error, the camera-IMU
+/// extrinsic's errors (used when the state estimates it), pixel, depth.
 struct InitializedLandmark {
   Vec3 p_s_l;
   Mat3 G_p;
   Mat3 G_psi;
+  Mat3 G_pbc = Mat3::Zero();  ///< w.r.t. the camera's position error in {b}
+  Mat3 G_thc = Mat3::Zero();  ///< w.r.t. the camera's rotation error (R_b_c = Exp(theta) R_b_c)
   Eigen::Matrix<double, 3, 2> G_uv;
   Vec3 G_depth;
 };

@@ -37,6 +37,8 @@ struct TriangulatedLandmark {
   /// d(l)/d(p_s_b, psi_s_b, clone position) and d(l)/d(pixel now, pixel at the clone, clone rotation)
   Eigen::Matrix<double, 3, 9> J_state;
   Eigen::Matrix<double, 3, 7> J_noise;
+  /// d(l)/d(the extrinsic's errors [p_b_c, theta_b_c]), when the state estimates it (else zero).
+  Eigen::Matrix<double, 3, 6> J_ext = Eigen::Matrix<double, 3, 6>::Zero();
   Mat3 P_ll = Mat3::Zero();  ///< covariance of l
   double depth_m = 0.0;      ///< along the current camera's z axis [m]
   /// The std-dev of rho from the state's uncertainty alone (the baseline from the clone to the

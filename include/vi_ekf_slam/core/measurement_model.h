@@ -5,23 +5,20 @@
 
 #include <Eigen/Core>
 
+#include "vi_ekf_slam/core/camera_extrinsics.h"
 #include "vi_ekf_slam/core/camera_model.h"
 #include "vi_ekf_slam/core/filter_state.h"
 #include "vi_ekf_slam/core/landmark.h"
 
 namespace vi_ekf_slam {
 
-/// Pose of the camera {c} in the body/IMU frame {b}.
-struct CameraExtrinsics {
-  Mat3 R_b_c = Mat3::Identity();
-  Vec3 p_b_c = Vec3::Zero();  ///< [m]
-};
-
 /// Jacobians of one predicted observation (2 rows): J_pi * [J_p, J_psi, J_Y] of eq. (30).
 struct ObservationJacobians {
   Eigen::Matrix<double, 2, 3> H_p;    ///< w.r.t. position error of {b} in {s}
   Eigen::Matrix<double, 2, 3> H_psi;  ///< w.r.t. orientation error psi_s_b
   Eigen::Matrix<double, 2, 3> H_l;    ///< w.r.t. the landmark's three state entries
+  Eigen::Matrix<double, 2, 3> H_pbc;  ///< w.r.t. the camera's position error in {b} (extrinsic)
+  Eigen::Matrix<double, 2, 3> H_thc;  ///< w.r.t. the camera's rotation error: R_b_c = Exp(theta) R_b_c
 };
 
 /// A Cartesian point p_s_l in the camera frame.

@@ -34,13 +34,24 @@ constexpr int kPns = 16;    ///< position of {s} in {n} (sensor-centric only)
 constexpr int kPsiNs = 19;  ///< orientation error psi_n_s (sensor-centric only)
 constexpr int kWorldCentricDim = 16;
 constexpr int kSensorCentricDim = 22;
-constexpr int kMaxMotionDim = 22;
+/// Camera-IMU extrinsic (online calibration, off by default, like OpenVINS's calib_cam_extrinsics):
+/// [dp_b_c, dtheta_b_c] after the mechanization's blocks, at extrinsicIndex(). dp_b_c is the
+/// camera position error in {b} [m]; dtheta_b_c the rotation error, R_b_c = Exp(dtheta) R_b_c_est.
+constexpr int kExtrinsicDim = 6;
+constexpr int kMaxMotionDim = kSensorCentricDim + kExtrinsicDim;
 /// The navigation output's covariance layout [p, v, b_a, psi, b_g] (NavState::cov).
 constexpr int kNavDim = 15;
 constexpr int kLandmarkDim = 3;
 }  // namespace idx
 
-/// Error-state dimension of the motion part s' for a mechanization.
-inline int motionDim(Mechanization m) { return isSensorCentric(m) ? idx::kSensorCentricDim : idx::kWorldCentricDim; }
+/// Where the extrinsic's error state starts (when it is estimated): after the mechanization's blocks.
+inline int extrinsicIndex(Mechanization m) {
+  return isSensorCentric(m) ? idx::kSensorCentricDim : idx::kWorldCentricDim;
+}
+/// Error-state dimension of the motion part s' for a mechanization (with the extrinsic, if it is
+/// estimated).
+inline int motionDim(Mechanization m, bool extrinsic = false) {
+  return extrinsicIndex(m) + (extrinsic ? idx::kExtrinsicDim : 0);
+}
 
 }  // namespace vi_ekf_slam
