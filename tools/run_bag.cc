@@ -243,6 +243,16 @@ nlohmann::ordered_json inputCounters(const glue::InputCounters& c) {
           {"divergences", c.divergences}};
 }
 
+/// The extrinsic the filter estimated, and how far it moved from the one it was given.
+nlohmann::ordered_json extrinsicReport(const EkfSlam& f) {
+  const CameraExtrinsics& T = f.extrinsics();
+  const CameraExtrinsics& T0 = f.calibratedExtrinsics();
+  const Quat q(T.R_b_c);
+  return {{"T_b_c", {T.p_b_c.x(), T.p_b_c.y(), T.p_b_c.z(), q.x(), q.y(), q.z(), q.w()}},
+          {"moved_deg", rotationError(q, Quat(T0.R_b_c)).norm() * 180.0 / M_PI},
+          {"moved_m", (T.p_b_c - T0.p_b_c).norm()}};
+}
+
 /// One mechanization over the bag: its trajectory, trace, health (into *health) and, with ground
 /// truth, its metrics (into *results).
 void runOne(const Options& o, const std::string& mechanization, const glue::InputBagInfo& info,
@@ -275,6 +285,10 @@ void runOne(const Options& o, const std::string& mechanization, const glue::Inpu
   h["output_s"] = sink.poses.size() > 1 ? sink.poses.back().t - sink.poses.front().t : 0.0;
   h["input_s"] = bag_s;
   h["inputs"] = inputCounters(processor.counters());
+  if (const EkfSlam* f = processor.filter(); f && params.filter.estimate_extrinsic) {
+    h["extrinsic"] = extrinsicReport(*f);
+    std::printf("  camera-IMU extrinsic estimated: %s\n", h["extrinsic"].dump().c_str());
+  }
   eval::writeTrace(o.out + "/" + name + "_trace.csv", sink.trace);
   std::cout << eval::healthLine(name, h);
   for (size_t k = 0; k < refs.size(); ++k) {

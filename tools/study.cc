@@ -84,6 +84,8 @@ struct Options {
   bool all_runs = false;             // every run's runN.csv and landmarks_runN.csv (else run 0's)
   bool list_configs = false;         // print the configurations and exit
   std::string imu_biases = "drawn";  // drawn | none: the simulated IMU's turn-on biases
+  bool estimate_extrinsic = false;   // every configuration estimates the camera-IMU extrinsic
+  std::string extrinsic_error;       // DEG,M: the filter is given an extrinsic this far off the true one
 };
 
 const char* const kUsage =
@@ -135,7 +137,11 @@ Options parse(int argc, char** argv) {
       "write every run's errors and sigmas (runN.csv, landmarks_runN.csv), not only run 0's")(
       "landmark-entry", po::value(&o.landmark_entry),
       "triangulated | prior: new inverse-depth tracks wait for the baseline that triangulates them, or enter at the "
-      "prior depth at once (default: the core's)")(
+      "prior depth at once (default: the core's)")("estimate-extrinsic", po::bool_switch(&o.estimate_extrinsic),
+                                                   "every configuration estimates the camera-IMU extrinsic online")(
+      "extrinsic-error", po::value(&o.extrinsic_error),
+      "DEG,M: the filter is given the camera-IMU extrinsic turned by DEG degrees and moved by M metres (fixed "
+      "directions) from the true one")(
       "fault", po::value(&o.faults)->composing(),
       "KIND:START_S:DURATION_S, repeatable: a sensor fault in every run (image_dropout, imu_gap, outlier_burst, "
       "camera_covered, imu_clipped)")(
@@ -223,6 +229,7 @@ EkfSlamConfig withStudyOptions(EkfSlamConfig c, const Options& o, const sim::Sce
   // The recorded IMU is EuRoC's MAV: standing on the ground it does not sway like a pedestrian.
   if (!o.imu.empty()) c.zero_velocity.velocity_sigma_mps = eval::kEurocMavStandingVelocitySigma;
   if (o.gate > 0.0) c.update.gate_probability = o.gate;
+  if (o.estimate_extrinsic) c.estimate_extrinsic = true;
   return c;
 }
 
@@ -440,6 +447,16 @@ sim::Scenario loadScenario(const Options& o, std::string* name) {
   if (o.init == "dynamic") sc.dynamic_init = DynamicInitParams();
   sc.draw_imu_biases = o.imu_biases == "drawn";
   sc.faults = parseFaults(o.faults);
+  if (!o.extrinsic_error.empty()) {
+    double deg = 0.0, m = 0.0;
+    if (std::sscanf(o.extrinsic_error.c_str(), "%lf,%lf", &deg, &m) != 2 || !std::isfinite(deg) || !std::isfinite(m)) {
+      usage("--extrinsic-error takes DEG,M");
+    }
+    CameraExtrinsics given = sc.T_b_c;
+    given.R_b_c = expSO3(Vec3(1.0, 1.0, 1.0).normalized() * (deg * M_PI / 180.0)) * given.R_b_c;
+    given.p_b_c += Vec3(1.0, -1.0, 1.0).normalized() * m;
+    sc.given_T_b_c = given;
+  }
   return sc;
 }
 

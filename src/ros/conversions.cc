@@ -204,6 +204,15 @@ vi_ekf_slam::FilterStatus toFilterStatus(const EkfSlam& filter, const NavState& 
   s.nis_per_dof = r.update.accepted > 0 ? r.update.nis_sum / (2.0 * r.update.accepted) : 0.0;
   s.time_offset_s = nav.t_d;
   s.time_offset_sigma_s = nav.t_d_sigma;
+  const CameraExtrinsics& T = filter.extrinsics();
+  tf2::toMsg(T.p_b_c, s.camera_in_imu.translation);
+  s.camera_in_imu.rotation = tf2::toMsg(Quat(T.R_b_c));
+  if (filter.state().estimatesExtrinsic()) {
+    const int e = filter.state().extrinsicIndex();
+    const MotionMatrix P = filter.state().motionCovariance();
+    s.extrinsic_translation_sigma_m = std::sqrt(P.block<3, 3>(e, e).diagonal().maxCoeff());
+    s.extrinsic_rotation_sigma_rad = std::sqrt(P.block<3, 3>(e + 3, e + 3).diagonal().maxCoeff());
+  }
   s.compositions = filter.compositions();
   s.stationary = r.zero_velocity_applied;
   s.parallax_px = r.stationary.parallax_px;

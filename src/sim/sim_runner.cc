@@ -225,7 +225,7 @@ SimRun runSimulation(const Scenario& sc, const EkfSlamConfig& config, const NavS
   const ImuSequence& imu = stream.imu();
   SimRun run;
   RunRecorder recorder(sc, imu, callback, keep_frames, &run);
-  VioPipeline pipeline(config, simulatedNodeStart(sc, config), sc.camera, sc.T_b_c, recorder);
+  VioPipeline pipeline(config, simulatedNodeStart(sc, config), sc.camera, sc.given_T_b_c.value_or(sc.T_b_c), recorder);
   // A start from the initializers knows neither position nor yaw: it is registered to the truth's
   // with an error drawn from the filter's prior, as a prior start is. A start over after the filter
   // was lost continues from its last estimate, as the node's odometry does.

@@ -2,7 +2,10 @@
 // against numerical differentiation through the state's boxplus, as the rest of the filter's.
 #include <gtest/gtest.h>
 
+#include <iostream>
+
 #include "test_helpers.h"
+#include "vi_ekf_slam/core/ekf_update.h"
 #include "vi_ekf_slam/core/frame_change.h"
 #include "vi_ekf_slam/core/imu_propagation.h"
 #include "vi_ekf_slam/core/landmark_initialization.h"
@@ -215,15 +218,16 @@ TEST(ExtrinsicCalibration, TriangulationJacobianMatchesNumeric) {
   const Vec3 X = s0.x.p_s_b + s0.x.q_s_b * (s0.x.T_b_c.p_b_c + s0.x.T_b_c.R_b_c * Vec3(0.3, -0.2, 4.0));
   const Mat3 R_s_b = s0.x.q_s_b.toRotationMatrix();
   const Vec3 p_clone = s0.x.p_s_b + R_s_b * (Vec3(-0.4, 0.1, 0.0) + s0.x.T_b_c.p_b_c);
-  s0.appendLandmark(5, Landmark::cartesian(p_clone), 1e-4 * Mat3::Identity(), 1e-3 * Eigen::MatrixXd::Random(3, s0.dim()));
+  s0.appendLandmark(5, Landmark::cartesian(p_clone), 1e-4 * Mat3::Identity(),
+                    1e-3 * Eigen::MatrixXd::Random(3, s0.dim()));
   s0.setCovariance(test::randomSpd(s0.dim(), rng, 0.001));
   CameraClone clone;
   clone.id = 5;
   clone.R_s_c = R_s_b * expSO3(Vec3(0.0, 0.02, 0.01)) * s0.x.T_b_c.R_b_c;
   const Mat3 R_s_b0 = clone.R_s_c * s0.x.T_b_c.R_b_c.transpose();
   Eigen::Vector2d uv_now, uv_clone;
-  ASSERT_TRUE(cam.project(s0.x.T_b_c.R_b_c.transpose() * (R_s_b.transpose() * (X - s0.x.p_s_b) - s0.x.T_b_c.p_b_c),
-                          &uv_now));
+  ASSERT_TRUE(
+      cam.project(s0.x.T_b_c.R_b_c.transpose() * (R_s_b.transpose() * (X - s0.x.p_s_b) - s0.x.T_b_c.p_b_c), &uv_now));
   ASSERT_TRUE(cam.project(clone.R_s_c.transpose() * (X - p_clone), &uv_clone));
   TriangulatedLandmark t;
   ASSERT_TRUE(triangulateLandmark(s0, clone, uv_clone, uv_now, cam, s0.x.T_b_c, 1.0, 0.1, &t));
@@ -240,6 +244,32 @@ TEST(ExtrinsicCalibration, TriangulationJacobianMatchesNumeric) {
       s0.dim());
   const int e = s0.extrinsicIndex();
   EXPECT_LT(test::maxAbs(Jn.middleCols<6>(e) - t.J_ext), 1e-5 * test::maxAbs(t.J_ext)) << "\n"
-                                                                                         << Jn.middleCols<6>(e) - t.J_ext;
+                                                                                       << Jn.middleCols<6>(e) - t.J_ext;
   EXPECT_LT(test::maxAbs(Jn.middleCols<3>(idx::kP) - t.J_state.leftCols<3>()), 1e-5 * test::maxAbs(t.J_state));
+}
+
+// Seen again from where they were first seen, new landmarks tell nothing about the extrinsic: the
+// camera's pose relative to them is known exactly as well as at their initialization, whatever
+// the extrinsic is. (Only the landmarks' own pixel noise shrinks.)
+TEST(ExtrinsicCalibration, LandmarksSeenAgainFromTheSamePoseAddNoExtrinsicInformation) {
+  std::mt19937_64 rng(78);
+  const CameraModel cam = test::paperCamera();
+  FilterState s = test::randomState(Mechanization::kSensorCentricComposition, 0, rng, true);
+  s.x.v_s_b.setZero();  // standing: the time offset's Jacobian (the image velocity) is zero too
+  std::vector<FeatureObservation> obs;
+  for (int i = 0; i < 30; ++i) {
+    const Eigen::Vector2d uv(60.0 + 20.0 * i, 100.0 + 12.0 * (i % 7) * 5.0);
+    obs.push_back({1000 + i, uv});
+    InverseDepthParams ip;
+    ASSERT_TRUE(initializeLandmarkInverseDepth(s, obs.back(), cam, s.x.T_b_c, ip));
+  }
+  const int e = s.extrinsicIndex();
+  const Eigen::MatrixXd before = s.covariance().block(e, e, 6, 6);
+  UpdateParams up;
+  up.gate_probability = 0.999999;
+  ekfUpdate(s, obs, cam, s.x.T_b_c, up);
+  const Eigen::MatrixXd after = s.covariance().block(e, e, 6, 6);
+  std::cout << "extrinsic std-devs before " << before.diagonal().cwiseSqrt().transpose() << "\n after  "
+            << after.diagonal().cwiseSqrt().transpose() << "\n";
+  EXPECT_LT(test::maxAbs(after - before), 1e-6 * test::maxAbs(before));
 }

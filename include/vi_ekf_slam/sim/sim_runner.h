@@ -47,6 +47,8 @@ struct Scenario {
   LandmarkWorld world;
   CameraModel camera;
   CameraExtrinsics T_b_c;
+  /// The extrinsic the filter is given, when it is not the true one (a rig measured with a ruler).
+  std::optional<CameraExtrinsics> given_T_b_c;
   ImuSimParams imu;
   CameraSimParams cam;
   /// A recorded IMU stream to use instead of synthesizing one from the trajectory (see
