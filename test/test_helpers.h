@@ -98,6 +98,21 @@ inline Eigen::MatrixXd numericJacobian(const std::function<Eigen::VectorXd(const
   return J;
 }
 
+/// Numerical Jacobian of a state -> state map (error state in, error state out).
+inline Eigen::MatrixXd numericFrameChangeJacobian(const FilterState& s0,
+                                                  const std::function<void(FilterState&)>& change) {
+  FilterState ref = s0;
+  change(ref);
+  return numericJacobian(
+      [&](const Eigen::VectorXd& d) -> Eigen::VectorXd {
+        FilterState s = s0;
+        s.boxplus(d);
+        change(s);
+        return s.boxminus(ref);
+      },
+      s0.dim());
+}
+
 inline double maxAbs(const Eigen::MatrixXd& M) { return M.cwiseAbs().maxCoeff(); }
 
 }  // namespace vi_ekf_slam::test

@@ -140,8 +140,8 @@ std::vector<ParamSpec> makeTable() {
       field("T_b_c", "camera", VI_FIELD(p.node.T_b_c), "",
             "camera pose in the IMU frame: x y z [m] qx qy qz qw (extrinsic_source parameters)"),
       field("estimate_extrinsic", "camera", VI_FIELD(p.filter.estimate_extrinsic), "",
-            "refine the camera-IMU extrinsic online (rotation and translation in the state; for a rig measured "
-            "with a ruler)"),
+            "refine the camera-IMU extrinsic online (rotation and translation in the state). Experimental: not yet "
+            "consistent, see docs/evaluation.md#known-limits"),
       stringChoice("image_transport", "camera", VI_FIELD(p.node.image_transport), "how images arrive",
                    {{"raw", "sensor_msgs/Image"}, {"compressed", "sensor_msgs/CompressedImage on <image>/compressed"}}),
       // --- filter

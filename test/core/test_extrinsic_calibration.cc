@@ -19,19 +19,6 @@ namespace {
 const Mechanization kAll[] = {Mechanization::kWorldCentric, Mechanization::kSensorCentric,
                               Mechanization::kSensorCentricComposition};
 
-Eigen::MatrixXd numericFrameChangeJacobian(const FilterState& s0, const std::function<void(FilterState&)>& change) {
-  FilterState ref = s0;
-  change(ref);
-  return test::numericJacobian(
-      [&](const Eigen::VectorXd& d) -> Eigen::VectorXd {
-        FilterState s = s0;
-        s.boxplus(d);
-        change(s);
-        return s.boxminus(ref);
-      },
-      s0.dim());
-}
-
 }  // namespace
 
 TEST(ExtrinsicCalibration, TheLayoutCarriesSixMoreEntriesAfterTheMechanizations) {
@@ -171,16 +158,16 @@ TEST(ExtrinsicCalibration, ANewLandmarksCovarianceWithTheExtrinsicIsFirstOrder) 
 TEST(ExtrinsicCalibration, FrameChangeJacobiansMatchNumeric) {
   std::mt19937_64 rng(75);
   const FilterState sc = test::randomState(Mechanization::kSensorCentricComposition, 3, rng, true);
-  EXPECT_LT(test::maxAbs(numericFrameChangeJacobian(sc, [](FilterState& s) { compose(s); }) -
+  EXPECT_LT(test::maxAbs(test::numericFrameChangeJacobian(sc, [](FilterState& s) { compose(s); }) -
                          denseJacobian(compositionJacobian(sc), sc.numLandmarks())),
             1e-7);
   const FilterState w = test::randomState(Mechanization::kWorldCentric, 3, rng, true);
-  EXPECT_LT(test::maxAbs(numericFrameChangeJacobian(
+  EXPECT_LT(test::maxAbs(test::numericFrameChangeJacobian(
                              w, [](FilterState& s) { switchMechanization(s, Mechanization::kSensorCentric); }) -
                          denseJacobian(worldToSensorJacobian(w), w.numLandmarks())),
             1e-7);
   const FilterState s = test::randomState(Mechanization::kSensorCentric, 3, rng, true);
-  EXPECT_LT(test::maxAbs(numericFrameChangeJacobian(
+  EXPECT_LT(test::maxAbs(test::numericFrameChangeJacobian(
                              s, [](FilterState& t) { switchMechanization(t, Mechanization::kWorldCentric); }) -
                          denseJacobian(sensorToWorldJacobian(s), s.numLandmarks())),
             1e-7);

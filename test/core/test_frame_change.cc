@@ -8,20 +8,6 @@ using namespace vi_ekf_slam;
 
 namespace {
 
-/// Numerical Jacobian of a state -> state map (error state in, error state out).
-Eigen::MatrixXd numericFrameChangeJacobian(const FilterState& s0, const std::function<void(FilterState&)>& change) {
-  FilterState ref = s0;
-  change(ref);
-  return test::numericJacobian(
-      [&](const Eigen::VectorXd& d) -> Eigen::VectorXd {
-        FilterState s = s0;
-        s.boxplus(d);
-        change(s);
-        return s.boxminus(ref);
-      },
-      s0.dim());
-}
-
 /// Nav-frame pose, velocity and landmarks with covariances must be identical.
 void expectSameNavigationView(const FilterState& a, const FilterState& b, double tol) {
   const NavState na = navState(a), nb = navState(b);
@@ -43,7 +29,7 @@ void expectSameNavigationView(const FilterState& a, const FilterState& b, double
 TEST(Composition, JacobianMatchesNumeric) {
   std::mt19937_64 rng(14);
   const FilterState s0 = test::randomState(Mechanization::kSensorCentricComposition, 4, rng);
-  const Eigen::MatrixXd Jn = numericFrameChangeJacobian(s0, [](FilterState& s) { compose(s); });
+  const Eigen::MatrixXd Jn = test::numericFrameChangeJacobian(s0, [](FilterState& s) { compose(s); });
   const Eigen::MatrixXd J = denseJacobian(compositionJacobian(s0), s0.numLandmarks());
   EXPECT_LT(test::maxAbs(Jn - J), 1e-7) << "\n" << Jn - J;
 }
@@ -75,8 +61,8 @@ TEST(Composition, PreservesNavigationFramePoseAndMapAndResetsSensorPose) {
 TEST(MechanizationSwitch, WorldToSensorJacobianMatchesNumeric) {
   std::mt19937_64 rng(17);
   const FilterState s0 = test::randomState(Mechanization::kWorldCentric, 3, rng);
-  const Eigen::MatrixXd Jn =
-      numericFrameChangeJacobian(s0, [](FilterState& s) { switchMechanization(s, Mechanization::kSensorCentric); });
+  const Eigen::MatrixXd Jn = test::numericFrameChangeJacobian(
+      s0, [](FilterState& s) { switchMechanization(s, Mechanization::kSensorCentric); });
   const Eigen::MatrixXd J = denseJacobian(worldToSensorJacobian(s0), s0.numLandmarks());
   ASSERT_EQ(J.rows(), idx::kSensorCentricDim + 9);
   EXPECT_LT(test::maxAbs(Jn - J), 1e-7) << "\n" << Jn - J;
@@ -85,8 +71,8 @@ TEST(MechanizationSwitch, WorldToSensorJacobianMatchesNumeric) {
 TEST(MechanizationSwitch, SensorToWorldJacobianMatchesNumeric) {
   std::mt19937_64 rng(18);
   const FilterState s0 = test::randomState(Mechanization::kSensorCentric, 3, rng);
-  const Eigen::MatrixXd Jn =
-      numericFrameChangeJacobian(s0, [](FilterState& s) { switchMechanization(s, Mechanization::kWorldCentric); });
+  const Eigen::MatrixXd Jn = test::numericFrameChangeJacobian(
+      s0, [](FilterState& s) { switchMechanization(s, Mechanization::kWorldCentric); });
   const Eigen::MatrixXd J = denseJacobian(sensorToWorldJacobian(s0), s0.numLandmarks());
   ASSERT_EQ(J.rows(), idx::kWorldCentricDim + 9);
   EXPECT_LT(test::maxAbs(Jn - J), 1e-7) << "\n" << Jn - J;
