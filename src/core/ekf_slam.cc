@@ -534,9 +534,9 @@ void EkfSlam::addLandmarksDelayed(const std::vector<FeatureObservation>& fresh, 
   // rest by the IMU they enter at the prior depth, as without the delay.
   const bool wait = seen_moving_ || defer;
   const int fill = defer ? 0 : config_.triangulation.min_map_landmarks - (state_.numLandmarks() - delayed_.clones());
-  const DelayedLandmarks::Selection sel =
-      delayed_.select(state_, fresh, camera_, state_.x.T_b_c, config_.triangulation, pixel_var, config_.update.gate_probability,
-                      wait, 1.0 / newLandmarkDepth(), fill, config_.inverse_depth_sigma);
+  const DelayedLandmarks::Selection sel = delayed_.select(state_, fresh, camera_, state_.x.T_b_c, config_.triangulation,
+                                                          pixel_var, config_.update.gate_probability, wait,
+                                                          1.0 / newLandmarkDepth(), fill, config_.inverse_depth_sigma);
   // The expired (not waiting, or taken by a map short of landmarks) enter at the prior depth.
   const std::vector<FeatureObservation>& at_prior = sel.expired;
   // Room for both and for a clone.

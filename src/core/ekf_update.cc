@@ -15,8 +15,8 @@ namespace vi_ekf_slam {
 namespace {
 struct AcceptedObservation {
   std::int64_t id;
-  int col;            ///< landmark column in the error state
-  int ext_col = -1;   ///< the extrinsic's first column, when the state estimates it
+  int col;           ///< landmark column in the error state
+  int ext_col = -1;  ///< the extrinsic's first column, when the state estimates it
   ObservationJacobians J;
   Eigen::Vector2d H_td;      ///< w.r.t. the time offset: the feature's image velocity [px/s]
   Eigen::Vector2d residual;  ///< measured - h(x) at the current linearization point [px]

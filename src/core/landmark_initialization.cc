@@ -179,8 +179,8 @@ double inverseDepthInCamera(const FilterState& state, int i, const CameraExtrins
       const int e = state.extrinsicIndex();
       const Vec3 v = p_s_l - state.x.p_s_b - R_s_b * T_b_c.p_b_c;
       J->segment<3>(e) = -dz * R_s_b;
-      J->segment<3>(e + 3) = -(1.0 / (z * z)) * Eigen::RowVector3d(T_b_c.R_b_c.col(2).transpose()) *
-                             skew(R_s_b.transpose() * v);
+      J->segment<3>(e + 3) =
+          -(1.0 / (z * z)) * Eigen::RowVector3d(T_b_c.R_b_c.col(2).transpose()) * skew(R_s_b.transpose() * v);
     }
   }
   return 1.0 / z;

@@ -38,9 +38,10 @@ NavState navState(const FilterState& s) {
   // Only the motion block of the structured Jacobian is needed: O(1) in the map size.
   const Eigen::MatrixXd J = sensorToWorldMotionJacobian(s.x);
   // (An estimated extrinsic's block, after the mechanization's, is not part of the navigation state.)
-  const Eigen::MatrixXd C = s.estimatesExtrinsic()
-                                ? Eigen::MatrixXd(J * s.motionCovariance().topLeftCorner(J.cols(), J.cols()) * J.transpose())
-                                : Eigen::MatrixXd(J * s.motionCovariance() * J.transpose());
+  const Eigen::MatrixXd C =
+      s.estimatesExtrinsic()
+          ? Eigen::MatrixXd(J * s.motionCovariance().topLeftCorner(J.cols(), J.cols()) * J.transpose())
+          : Eigen::MatrixXd(J * s.motionCovariance() * J.transpose());
   out.cov = C.topLeftCorner<idx::kNavDim, idx::kNavDim>();
   out.cov = (0.5 * (out.cov + out.cov.transpose())).eval();
   return out;
