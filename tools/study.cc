@@ -571,7 +571,8 @@ eval::Report summaryReport(const Options& o, const std::string& traj_name, const
                            {"nees_pose_first_10s", s.nees_pose_early},
                            {"runs_started", s.runs_started},
                            {"init_delay_s", s.init_delay_s},
-                           {"ate_posyaw_runs_m", s.ate_posyaw_runs_m}};
+                           {"ate_posyaw_runs_m", s.ate_posyaw_runs_m},
+                           {"revisit_error_ratio", s.revisit_error_ratio}};
   }
   r.runs.columns = {{"ate_position_m", "ATE pos [m]", 3},
                     {"ate_posyaw_m", "ATE posyaw [m]", 3},
@@ -582,6 +583,7 @@ eval::Report summaryReport(const Options& o, const std::string& traj_name, const
                     {"nees_orientation", "NEES rot", 2},
                     {"nees_pose", "NEES pose", 2},
                     {"consistent_fraction", "consistent", 2},
+                    {"revisit_error_ratio", "error on return / first", 2},
                     {"final_scale_ratio", "final gamma", 3},
                     {"filter_ms_mean", "filter [ms]", 2},
                     {"filter_ms_p95", "filter p95 [ms]", 2},

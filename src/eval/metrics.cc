@@ -91,4 +91,36 @@ double rpePosition(const std::vector<Vec3>& p_true, const std::vector<Quat>& q_t
   return rms(e);
 }
 
+RevisitErrors revisitErrors(const std::vector<double>& t, const std::vector<Vec3>& p_true,
+                            const std::vector<Vec3>& p_est, double radius_m, double min_gap_s) {
+  RevisitErrors out;
+  if (t.size() != p_true.size() || p_est.size() != p_true.size()) {
+    throw std::invalid_argument("revisitErrors: one time and one estimate per true position");
+  }
+  std::vector<std::pair<size_t, size_t>> pairs;  // (earlier, later)
+  for (size_t i = 0; i < t.size(); ++i) {
+    for (size_t j = 0; j < i && t[i] - t[j] >= min_gap_s; ++j) {
+      if ((p_true[i] - p_true[j]).norm() < radius_m) {
+        pairs.emplace_back(j, i);
+        break;  // the first visit only
+      }
+    }
+  }
+  out.pairs = static_cast<int>(pairs.size());
+  if (pairs.empty() || pairs.front().second < 2) return out;
+  // Registered (yaw and position) on the way to the first return, the part that mapped the places:
+  // the start's yaw and position, which nothing observes, are then out of both errors.
+  const size_t first_return = pairs.front().second;
+  const YawTranslation T = alignPosYaw(std::vector<Vec3>(p_est.begin(), p_est.begin() + first_return),
+                                       std::vector<Vec3>(p_true.begin(), p_true.begin() + first_return));
+  std::vector<Vec3> first, again;
+  for (const auto& [j, i] : pairs) {
+    first.push_back(p_true[j] - T.apply(p_est[j]));
+    again.push_back(p_true[i] - T.apply(p_est[i]));
+  }
+  out.first_m = rms(first);
+  out.again_m = rms(again);
+  return out;
+}
+
 }  // namespace vi_ekf_slam::eval

@@ -49,6 +49,25 @@ Path stairwellPath(double radius, double turns, double ds = 0.01) {
   return pts;
 }
 
+/// A corridor walked there and back: `length` metres straight, a U-turn to the left of `radius`,
+/// over 6 m back to 0.2 m beside the way out, and on back along it.
+Path thereAndBackPath(double length, double radius, double ds = 0.01) {
+  Path pts;
+  for (int i = 0; i * ds < length; ++i) pts.emplace_back(i * ds, 0.0);
+  for (int i = 0; i * ds / radius < M_PI; ++i) {
+    const double a = i * ds / radius;
+    pts.emplace_back(length + radius * std::sin(a), radius * (1.0 - std::cos(a)));
+  }
+  constexpr double kShift = 6.0, kBeside = 0.2;
+  for (int i = 0; i * ds <= length; ++i) {
+    const double s = i * ds;
+    const double y =
+        s < kShift ? 2.0 * radius - (2.0 * radius - kBeside) * 0.5 * (1.0 - std::cos(M_PI * s / kShift)) : kBeside;
+    pts.emplace_back(length - s, y);
+  }
+  return pts;
+}
+
 /// Piecewise-constant speed [(t_start, speed), ...] with 1.5 s cosine ramps between levels.
 double smoothSteps(double t, const std::vector<std::pair<double, double>>& knots) {
   constexpr double kRamp = 1.5;
@@ -66,16 +85,22 @@ double smoothSteps(double t, const std::vector<std::pair<double, double>>& knots
   return v;
 }
 
-/// The path's point at arc length s (periodic over its length), by linear interpolation.
+/// The path's point at arc length s, by linear interpolation: periodic over its length for a
+/// closed path (a loop), held at its ends for an open one.
 class ArcLengthPath {
  public:
   explicit ArcLengthPath(Path pts) : pts_(std::move(pts)), s_(pts_.size(), 0.0) {
     for (size_t i = 1; i < pts_.size(); ++i) s_[i] = s_[i - 1] + (pts_[i] - pts_[i - 1]).norm();
+    closed_ = (pts_.front() - pts_.back()).norm() < 0.1;
   }
   double length() const { return s_.back(); }
   Eigen::Vector2d at(double s) const {
-    s = std::fmod(s, length());
-    if (s < 0.0) s += length();
+    if (closed_) {
+      s = std::fmod(s, length());
+      if (s < 0.0) s += length();
+    } else {
+      s = std::clamp(s, 0.0, length());
+    }
     const size_t i = static_cast<size_t>(std::upper_bound(s_.begin(), s_.end(), s) - s_.begin());
     if (i == 0) return pts_.front();
     if (i >= pts_.size()) return pts_.back();
@@ -86,6 +111,7 @@ class ArcLengthPath {
  private:
   Path pts_;
   std::vector<double> s_;
+  bool closed_ = true;
 };
 
 struct WalkSpec {
@@ -202,6 +228,15 @@ WalkSpec spec(const std::string& kind) {
     w.speed = constant(1.0);
     w.path = blockPath(6.0, 4.0, 0.8);
     w.seed = 12;
+  } else if (kind == "there_and_back") {  // 40 m down a corridor and back, to 1 m before its end
+    w.path = thereAndBackPath(40.0, 0.8);
+    w.speed = constant(kCruiseMps);
+    w.duration_s = (ArcLengthPath(w.path).length() - 1.0) / kCruiseMps;
+    w.seed = 21;
+  } else if (kind == "laps") {  // twice round the block (81 m a lap)
+    w.speed = constant(kCruiseMps);
+    w.duration_s = 130.0;
+    w.seed = 22;
   } else if (kind == "run") {
     w.speed = constant(3.5);
     w.duration_s = 60.0;
@@ -217,7 +252,9 @@ WalkSpec spec(const std::string& kind) {
 std::vector<std::string> generatedWalkKinds(bool suite_only) {
   std::vector<std::string> kinds = {"slow_start", "crawl", "stops", "stairs", "fast", "stairwell"};
   if (!suite_only) {
-    for (const char* k : {"slow_walk", "start04", "stop_and_go", "small_room", "run"}) kinds.push_back(k);
+    for (const char* k : {"slow_walk", "start04", "stop_and_go", "small_room", "run", "there_and_back", "laps"}) {
+      kinds.push_back(k);
+    }
   }
   return kinds;
 }

@@ -86,6 +86,9 @@ void trajectoryMetrics(const std::vector<Vec3>& p_true, const std::vector<Vec3>&
   out->ate_orientation_deg = eval::rms(q_err_deg);
   out->final_position_error_m = e.empty() ? 0.0 : e.back().norm();
   out->distance_m = eval::pathLength(p_true);
+  std::vector<double> t;
+  for (const auto& f : out->frames) t.push_back(f.t);
+  out->revisits = eval::revisitErrors(t, p_true, p_est);
 }
 
 }  // namespace
@@ -262,6 +265,11 @@ ConsistencySummary summarize(const std::string& name, const std::vector<RunResul
     fin.push_back(r.final_position_error_m);
     gam.push_back(r.frames.back().gamma);
   }
+  std::vector<double> revisit;
+  for (const auto& r : runs) {
+    if (r.revisits.pairs > 0) revisit.push_back(r.revisits.ratio());
+  }
+  s.revisit_error_ratio = revisit.empty() ? std::nan("") : mean(revisit);
   s.ate_position_m = mean(ate);
   s.ate_posyaw_m = mean(s.ate_posyaw_runs_m);
   s.real_time_factor = mean(rtf);

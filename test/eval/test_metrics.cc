@@ -74,3 +74,39 @@ TEST(Metrics, AteAndRpe) {
   EXPECT_NEAR(eval::rpePosition(p_true, q, p_est, q, 2), 0.2, 1e-12);
   EXPECT_NEAR(eval::pathLength(p_true), 9.0, 1e-12);
 }
+
+// Coming back to places: a walk 40 m out and back along x whose estimate drifts sideways by
+// 1 cm per second. Registered on the way out, the error at a place on return is the drift then,
+// against the drift when the place was first passed; a yaw and offset of the whole estimate (the
+// start's registration, which nothing observes) change nothing.
+TEST(Metrics, RevisitErrorsCompareTheReturnWithTheFirstVisit) {
+  std::vector<double> t;
+  std::vector<Vec3> truth, est;
+  for (int k = 0; k <= 800; ++k) {  // 1 m/s, 10 Hz: out for 40 s, back for 40 s
+    const double s = 0.1 * k;
+    t.push_back(s);
+    truth.emplace_back(s <= 40.0 ? s : 80.0 - s, 0.0, 0.0);
+    est.push_back(truth.back() + Vec3(0.0, 0.01 * s, 0.0));
+  }
+  const eval::RevisitErrors r = eval::revisitErrors(t, truth, est);
+  // The first return 20 s after a place (x = 30 m at 30 s and 50 s) on: places x <= 30 m again.
+  EXPECT_GE(r.pairs, 300);
+  EXPECT_LE(r.pairs, 305);
+  std::printf("revisits: %d pairs, %.3f m then, %.3f m again\n", r.pairs, r.first_m, r.again_m);
+  // Registered on the way out (yaw + offset fitted to the linear drift), the remaining errors at
+  // x on the way out and back differ by the drift accumulated in between: 0.01 (80 - 2x) m.
+  EXPECT_GT(r.ratio(), 1.5);
+  const Quat yaw(Eigen::AngleAxisd(0.3, Vec3::UnitZ()));
+  std::vector<Vec3> moved;
+  for (const Vec3& p : est) moved.push_back(yaw * p + Vec3(5.0, -3.0, 0.0));
+  const eval::RevisitErrors m = eval::revisitErrors(t, truth, moved);
+  EXPECT_NEAR(m.ratio(), r.ratio(), 1e-9);
+  EXPECT_NEAR(m.again_m, r.again_m, 1e-9);
+  // No drift: no error on return either; a walk that never comes back has no pairs.
+  EXPECT_NEAR(eval::revisitErrors(t, truth, truth).again_m, 0.0, 1e-12);
+  const std::vector<double> t_out(t.begin(), t.begin() + 401);
+  const std::vector<Vec3> out(truth.begin(), truth.begin() + 401);
+  EXPECT_EQ(eval::revisitErrors(t_out, out, out).pairs, 0);
+  EXPECT_TRUE(std::isnan(eval::revisitErrors(t_out, out, out).ratio()));
+  EXPECT_THROW(eval::revisitErrors(t_out, truth, truth), std::invalid_argument);
+}

@@ -3,8 +3,10 @@
 // gait's cadence and amplitudes.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 
+#include "vi_ekf_slam/eval/metrics.h"
 #include "vi_ekf_slam/sim/gait.h"
 #include "vi_ekf_slam/sim/generated_walks.h"
 
@@ -83,6 +85,31 @@ TEST(Gait, TheCadenceFollowsTheSpeedAndStandingLeavesOnlyThePosturalSway) {
   }
   EXPECT_NEAR(max_up, 0.025, 0.001);
   EXPECT_NEAR(max_side, 0.03, 0.001);
+}
+
+}  // namespace
+}  // namespace vi_ekf_slam::sim
+
+namespace vi_ekf_slam::sim {
+namespace {
+
+// The walks that come back: there_and_back returns along its way out (within 0.5 m of where it
+// was more than 20 s before, for most of the way back), laps passes every place of its first lap
+// again.
+TEST(GeneratedWalks, TheReturningWalksComeBackToWhereTheyWere) {
+  for (const char* kind : {"there_and_back", "laps"}) {
+    SCOPED_TRACE(kind);
+    const std::vector<eval::StampedPose> w = generatedWalk(kind);
+    std::vector<double> t;
+    std::vector<Vec3> p;
+    for (size_t i = 0; i < w.size(); i += 10) {  // 10 Hz
+      t.push_back(w[i].t);
+      p.push_back(w[i].p);
+    }
+    const eval::RevisitErrors r = eval::revisitErrors(t, p, p);
+    const double later = static_cast<double>(std::count_if(t.begin(), t.end(), [&](double x) { return x > 30.0; }));
+    EXPECT_GT(r.pairs, 0.5 * later);
+  }
 }
 
 }  // namespace

@@ -5,6 +5,7 @@
 #pragma once
 
 #include <Eigen/Core>
+#include <cmath>
 #include <vector>
 
 #include "vi_ekf_slam/core/so3.h"
@@ -43,6 +44,20 @@ struct YawTranslation {
   Quat apply(const Quat& q) const;
 };
 YawTranslation alignPosYaw(const std::vector<Vec3>& est, const std::vector<Vec3>& truth);
+
+/// Coming back to a place: every pose that is within radius_m of an earlier pose at least
+/// min_gap_s before (the first such one) pairs with it; their position errors then and again,
+/// with the estimate registered (yaw and position, alignPosYaw) on the poses before the first
+/// return, those that mapped the places.
+struct RevisitErrors {
+  int pairs = 0;
+  double first_m = std::nan("");  ///< RMS position error at the earlier poses [m]
+  double again_m = std::nan("");  ///< RMS position error at the later poses [m]
+  /// again_m / first_m: below 1 when a map that is kept corrects the pose on return (NaN: none).
+  double ratio() const { return pairs > 0 && first_m > 0.0 ? again_m / first_m : std::nan(""); }
+};
+RevisitErrors revisitErrors(const std::vector<double>& t, const std::vector<Vec3>& p_true,
+                            const std::vector<Vec3>& p_est, double radius_m = 0.5, double min_gap_s = 20.0);
 
 /// Path length of a sequence of positions.
 double pathLength(const std::vector<Vec3>& p);

@@ -10,7 +10,9 @@
 //   stairwell   from a stand, within a second up a stairwell that turns all the time (a helix of
 //               1.6 m radius, 0.75 rad/s, 0.24 m up per second) for 34 s, then the block.
 // Probes the suite does not run by default: slow_walk (0.6 m/s), start04 (0.4 m/s for 10 s),
-// stop_and_go (a 1 s stop every 7 s), small_room (1.0 m/s round a 6 m x 4 m room), run (3.5 m/s).
+// stop_and_go (a 1 s stop every 7 s), small_room (1.0 m/s round a 6 m x 4 m room), run (3.5 m/s),
+// and the walks that come back to where they have been (a map's revisits): there_and_back (40 m
+// down a corridor and back), laps (twice round the block).
 #pragma once
 
 #include <string>

@@ -51,6 +51,8 @@ struct RunResult {
   /// From the start of the run to the filter's initialization (0 when started from the truth or
   /// the prior; NaN when a dynamic start never initialized) [s]. The frames start there.
   double init_delay_s = 0.0;
+  /// Coming back to places seen more than 20 s before (within 0.5 m): the errors then and again.
+  eval::RevisitErrors revisits;
 };
 
 /// Draws the initial estimate: truth minus an error ~ N(0, P0) of the world-centric prior
@@ -74,8 +76,11 @@ struct ConsistencySummary {
   std::vector<double> ate_posyaw_runs_m;  ///< every initialized run's RunResult::ate_posyaw_m [m]
   double ate_position_m = 0.0;            ///< mean over runs of the per-run position RMSE
   double ate_posyaw_m = 0.0;              ///< the same after posyaw alignment
-  double real_time_factor = 0.0;          ///< mean over runs
-  double ate_orientation_deg = 0.0;       ///< mean over runs of the per-run orientation RMSE
+  /// Over the runs that came back to places: the mean of their error on return over their error
+  /// when the place was first seen (eval::RevisitErrors::ratio; NaN when no run came back).
+  double revisit_error_ratio = std::nan("");
+  double real_time_factor = 0.0;     ///< mean over runs
+  double ate_orientation_deg = 0.0;  ///< mean over runs of the per-run orientation RMSE
   double final_position_error_m = 0.0;
   double final_position_error_pct = 0.0;  ///< of the distance walked
   double distance_m = 0.0;
