@@ -179,10 +179,9 @@ const std::string& EkfSlamRos::tfConflict(const std::string& parent, const std::
 void EkfSlamRos::diagnoseTf(diagnostic_updater::DiagnosticStatusWrapper& stat) {
   using diagnostic_msgs::DiagnosticStatus;
   // From startup on, before there is anything to broadcast: the frame the node will move.
-  const NodeOptions& o = processor_->params().node;
-  const std::string child =
-      o.publish_tf == TfMode::kOdom && !o.base_frame.empty() ? o.base_frame : processor_->bodyFrame();
-  if (!child.empty()) tfConflict(processor_->outputFrames().fixedFrame(), child);
+  const OutputFrames& frames = processor_->outputFrames();
+  const std::string child = frames.movedFrame(processor_->bodyFrame());
+  if (!child.empty()) tfConflict(frames.fixedFrame(), child);
   if (!tf_conflict_.empty()) {
     stat.summary(DiagnosticStatus::ERROR, tf_conflict_);
   } else if (tf_sent_) {

@@ -131,8 +131,8 @@ std::string OutputFrames::prepare(const std::string& imu_frame, const tf2::Buffe
 
 nav_msgs::Odometry OutputFrames::odometry(const nav_msgs::Odometry& imu_in_world) {
   if (mode_ == TfMode::kWorld) return imu_in_world;
-  const nav_msgs::Odometry base = attachedFrameOdometry(imu_in_world, T_b_i_.value_or(Eigen::Isometry3d::Identity()),
-                                                        base_frame_.empty() ? imu_frame_ : base_frame_);
+  const nav_msgs::Odometry base =
+      attachedFrameOdometry(imu_in_world, T_b_i_.value_or(Eigen::Isometry3d::Identity()), movedFrame(imu_frame_));
   if (!T_o_w_) {
     T_o_w_ = last_T_o_b_ ? gravityAlignedOffset(*last_T_o_b_, poseOf(base)) : Eigen::Isometry3d::Identity();
   }

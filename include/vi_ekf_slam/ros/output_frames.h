@@ -44,6 +44,11 @@ class OutputFrames {
   TfMode mode() const { return mode_; }
   /// The fixed frame of the outputs (odom_frame or world_frame).
   const std::string& fixedFrame() const { return mode_ == TfMode::kWorld ? world_frame_ : odom_frame_; }
+  /// The frame the published odometry (and TF) moves: the IMU frame in world mode, else base_frame
+  /// (the IMU frame when empty).
+  std::string movedFrame(const std::string& imu_frame) const {
+    return mode_ == TfMode::kWorld || base_frame_.empty() ? imu_frame : base_frame_;
+  }
   /// Looks up base_frame <- imu_frame once (when they differ). "" when ready, else why not.
   std::string prepare(const std::string& imu_frame, const tf2::BufferCore* tf);
   /// The published odometry from the IMU's odometry in the filter's world (z up); needs prepare().
