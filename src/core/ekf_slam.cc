@@ -14,8 +14,7 @@
 namespace vi_ekf_slam {
 
 EkfSlam::EkfSlam(const EkfSlamConfig& config, const CameraModel& camera, const CameraExtrinsics& T_b_c)
-    : config_(config), camera_(camera), T_b_c_(T_b_c), state_(config.mechanization, config.estimate_extrinsic) {
-  state_.x.T_b_c = T_b_c_;
+    : config_(config), camera_(camera), T_b_c_(T_b_c), state_(emptyState(config.mechanization)) {
   const std::string err = config_.validate();
   if (!err.empty()) throw std::invalid_argument("EkfSlamConfig:\n" + err);
   if (!camera_.intrinsics().validate().empty() || camera_.width() <= 0) {
@@ -30,8 +29,7 @@ EkfSlam::EkfSlam(const EkfSlamConfig& config, const CameraModel& camera, const C
 }
 
 void EkfSlam::reset() {
-  state_ = FilterState(config_.mechanization, config_.estimate_extrinsic);
-  state_.x.T_b_c = T_b_c_;
+  state_ = emptyState(config_.mechanization);
   initialized_ = false;
   imu_.clear();
   recent_imu_.clear();
@@ -54,13 +52,18 @@ void EkfSlam::initialize(const NavState& init, const InitialUncertainty& u, doub
   start(startingState(init, u, time_offset_s), scene_depth_m);
 }
 
+FilterState EkfSlam::emptyState(Mechanization m) const {
+  FilterState s(m, config_.estimate_extrinsic);
+  s.x.T_b_c = T_b_c_;
+  return s;
+}
+
 FilterState EkfSlam::startingState(const NavState& init, const InitialUncertainty& u,
                                    std::optional<double> time_offset_s) const {
   using namespace idx;
   // Start world-centric: the initial pose uncertainty is the registration error in {n}.
-  FilterState s(Mechanization::kWorldCentric, config_.estimate_extrinsic);
+  FilterState s = emptyState(Mechanization::kWorldCentric);  // (a restart forgets a refined extrinsic)
   s.timestamp = init.timestamp;
-  s.x.T_b_c = T_b_c_;  // the calibration (a restart forgets what was refined)
   s.x.p_s_b = init.p_n_b;
   s.x.v_s_b = init.v_n_b;
   s.x.q_s_b = init.q_n_b.normalized();

@@ -128,6 +128,8 @@ class EkfSlam {
   /// the counts of r.
   void addLandmarksDelayed(const std::vector<FeatureObservation>& fresh, double t, bool defer, FrameResult* r);
   /// The world-centric starting state (its covariance the registration's and u's).
+  /// A state of the configured layout with the calibrated extrinsic and nothing else.
+  FilterState emptyState(Mechanization m) const;
   FilterState startingState(const NavState& init, const InitialUncertainty& u,
                             std::optional<double> time_offset_s) const;
   /// Starts from s (world-centric, switched to the configured mechanization).
