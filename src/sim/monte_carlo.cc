@@ -256,18 +256,15 @@ ConsistencySummary summarize(const std::string& name, const std::vector<RunResul
   for (size_t k = 0; k < T && s.t[k] - s.t.front() < kEarlyWindowS; ++k) early.push_back(s.avg_nees_pose[k]);
   s.nees_pose_early = mean(early);
   s.consistent_fraction = counted ? static_cast<double>(inside) / counted : 0.0;
-  std::vector<double> ate, ateq, fin, gam, rtf;
+  std::vector<double> ate, ateq, fin, gam, rtf, revisit;
   for (const auto& r : runs) {
+    if (r.revisits.pairs > 0) revisit.push_back(r.revisits.ratio());
     s.ate_posyaw_runs_m.push_back(r.ate_posyaw_m);
     rtf.push_back(r.real_time_factor);
     ate.push_back(r.ate_position_m);
     ateq.push_back(r.ate_orientation_deg);
     fin.push_back(r.final_position_error_m);
     gam.push_back(r.frames.back().gamma);
-  }
-  std::vector<double> revisit;
-  for (const auto& r : runs) {
-    if (r.revisits.pairs > 0) revisit.push_back(r.revisits.ratio());
   }
   s.revisit_error_ratio = revisit.empty() ? std::nan("") : mean(revisit);
   s.ate_position_m = mean(ate);
