@@ -264,11 +264,11 @@ void runOne(const Options& o, const std::string& mechanization, const glue::Inpu
   tf2::BufferCore tf;
   glue::EkfSlamProcessor processor(params, sink, &tf);
   if (o.segments) sink.processor = &processor;
-  eval::Progress progress(name, info.end - info.start);  // on a terminal only
+  const double bag_s = info.end - info.start;
+  eval::Progress progress(name, bag_s);  // on a terminal only
   const double wall =
       glue::replayBag(o.bag, topics, processor, tf, [&](double done, double) { progress.update(done); });
   progress.finish();
-  const double bag_s = info.end - info.start;
   fs::create_directories(o.out);
   std::vector<eval::StampedPose> traj;
   for (const auto& p : sink.poses) traj.push_back({p.t, p.p, p.q, p.cov});
