@@ -86,6 +86,8 @@ struct Options {
   std::string imu_biases = "drawn";  // drawn | none: the simulated IMU's turn-on biases
   bool estimate_extrinsic = false;   // every configuration estimates the camera-IMU extrinsic
   std::string extrinsic_error;       // DEG,M: the filter is given an extrinsic this far off the true one
+  std::string map;           // "keep" | "forget": landmarks whose tracks ended stay dormant or go; "": the core's
+  int texture_patterns = 0;  // > 0: the world's appearance repeats N patterns (repeated texture)
 };
 
 const char* const kUsage =
@@ -142,6 +144,11 @@ Options parse(int argc, char** argv) {
       "extrinsic-error", po::value(&o.extrinsic_error),
       "DEG,M: the filter is given the camera-IMU extrinsic turned by DEG degrees and moved by M metres (fixed "
       "directions) from the true one")(
+      "map", po::value(&o.map),
+      "keep | forget: landmarks whose tracks ended stay in the state as dormant and are found again by their "
+      "appearance, or are marginalized (every configuration; default: the core's)")(
+      "texture-patterns", po::value(&o.texture_patterns)->default_value(o.texture_patterns),
+      "N > 0: repeated texture, the landmarks' appearance repeats N patterns over the world (0: all differ)")(
       "fault", po::value(&o.faults)->composing(),
       "KIND:START_S:DURATION_S, repeatable: a sensor fault in every run (image_dropout, imu_gap, outlier_burst, "
       "camera_covered, imu_clipped)")(
@@ -196,6 +203,8 @@ Options parse(int argc, char** argv) {
   if (!o.landmark_entry.empty() && o.landmark_entry != "triangulated" && o.landmark_entry != "prior") {
     usage("--landmark-entry must be triangulated or prior");
   }
+  if (!o.map.empty() && o.map != "keep" && o.map != "forget") usage("--map must be keep or forget");
+  if (o.texture_patterns < 0) usage("--texture-patterns must be >= 0");
   if (!o.depth_prior.empty() && o.depth_prior != "fixed" && o.depth_prior != "scene") {
     usage("--depth-prior must be fixed or scene");
   }
@@ -230,6 +239,7 @@ EkfSlamConfig withStudyOptions(EkfSlamConfig c, const Options& o, const sim::Sce
   if (!o.imu.empty()) c.zero_velocity.velocity_sigma_mps = eval::kEurocMavStandingVelocitySigma;
   if (o.gate > 0.0) c.update.gate_probability = o.gate;
   if (o.estimate_extrinsic) c.estimate_extrinsic = true;
+  if (!o.map.empty()) c.map.enabled = o.map == "keep";
   return c;
 }
 
@@ -447,6 +457,7 @@ sim::Scenario loadScenario(const Options& o, std::string* name) {
   if (o.init == "dynamic") sc.dynamic_init = DynamicInitParams();
   sc.draw_imu_biases = o.imu_biases == "drawn";
   sc.faults = parseFaults(o.faults);
+  sc.cam.descriptors.texture_patterns = o.texture_patterns;
   if (!o.extrinsic_error.empty()) {
     double deg = 0.0, m = 0.0;
     if (std::sscanf(o.extrinsic_error.c_str(), "%lf,%lf", &deg, &m) != 2 || !std::isfinite(deg) || !std::isfinite(m)) {
@@ -572,7 +583,9 @@ eval::Report summaryReport(const Options& o, const std::string& traj_name, const
                            {"runs_started", s.runs_started},
                            {"init_delay_s", s.init_delay_s},
                            {"ate_posyaw_runs_m", s.ate_posyaw_runs_m},
-                           {"revisit_error_ratio", s.revisit_error_ratio}};
+                           {"revisit_error_ratio", s.revisit_error_ratio},
+                           {"revisits_per_run", s.revisits_per_run},
+                           {"false_revisits", s.false_revisits}};
   }
   r.runs.columns = {{"ate_position_m", "ATE pos [m]", 3},
                     {"ate_posyaw_m", "ATE posyaw [m]", 3},
@@ -584,6 +597,8 @@ eval::Report summaryReport(const Options& o, const std::string& traj_name, const
                     {"nees_pose", "NEES pose", 2},
                     {"consistent_fraction", "consistent", 2},
                     {"revisit_error_ratio", "error on return / first", 2},
+                    {"revisits_per_run", "revisits / run", 1},
+                    {"false_revisits", "false revisits", 0},
                     {"final_scale_ratio", "final gamma", 3},
                     {"filter_ms_mean", "filter [ms]", 2},
                     {"filter_ms_p95", "filter p95 [ms]", 2},

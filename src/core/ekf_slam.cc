@@ -1,12 +1,15 @@
 #include "vi_ekf_slam/core/ekf_slam.h"
 
 #include <array>
+#include <map>
 
 #include <algorithm>
 #include <cmath>
 #include <limits>
 #include <stdexcept>
 
+#include "vi_ekf_slam/core/chi_squared.h"
+#include "vi_ekf_slam/core/ekf_update.h"
 #include "vi_ekf_slam/core/frame_change.h"
 #include "vi_ekf_slam/core/imu_propagation.h"
 #include "vi_ekf_slam/core/landmark_initialization.h"
@@ -43,6 +46,7 @@ void EkfSlam::reset() {
   outlier_watch_.reset();
   delayed_.clear(nullptr);
   seen_moving_ = false;
+  forgetMap();
 }
 
 void EkfSlam::initialize(const NavState& init) { initialize(init, config_.initial); }
@@ -114,6 +118,7 @@ void EkfSlam::start(FilterState s, double scene_depth_m) {
   state_ = std::move(s);
   delayed_.clear(nullptr);
   last_seen_.clear();
+  forgetMap();
   for (int i = 0; i < state_.numLandmarks(); ++i)
     last_seen_[state_.landmarkIds()[static_cast<size_t>(i)]] = state_.timestamp;
   stationary_.reset();
@@ -356,6 +361,8 @@ void EkfSlam::removeLandmarksById(const std::vector<std::int64_t>& ids) {
   for (auto id : ids) {
     if (auto i = state_.findLandmark(id)) indices.push_back(*i);
     last_seen_.erase(id);
+    descriptors_.erase(id);
+    dormant_.erase(id);
   }
   state_.removeLandmarks(indices);
 }
@@ -393,10 +400,14 @@ FrameResult EkfSlam::processFrame(const CameraFrame& camera_frame) {
   }
   detectStanding(frame, at_rest, &r);
   std::vector<FeatureObservation> known, fresh;
-  for (const auto& f : frame.features) {
+  for (FeatureObservation f : frame.features) {
     // (An id in the clones' range is no track's: refused, it would observe a clone.)
-    if (f.uv.allFinite() && !isCloneId(f.id)) (state_.findLandmark(f.id) ? known : fresh).push_back(f);
+    if (!f.uv.allFinite() || isCloneId(f.id)) continue;
+    if (const auto a = revisiting_.find(f.id); a != revisiting_.end() && a->second != kNotRevisit) f.id = a->second;
+    (state_.findLandmark(f.id) ? known : fresh).push_back(f);
   }
+  const std::vector<RevisitMatch> revisits =
+      config_.map.enabled ? findRevisits(camera_frame, &fresh, &known) : std::vector<RevisitMatch>{};
   updateSeenMoving(r);
   const bool defer =
       config_.zero_velocity.enabled && config_.zero_velocity.defer_landmarks && !seen_moving_ && !at_rest;
@@ -407,7 +418,28 @@ FrameResult EkfSlam::processFrame(const CameraFrame& camera_frame) {
   // decided (a crawl's IMU is as quiet as a stand's, its images are not), else the IMU's.
   const bool camera_still = r.stationary.decided ? r.stationary.stationary : at_rest;
   outlier_watch_.record(r.update, seen_moving_ && !camera_still, frame.timestamp, config_.update);
-  for (const auto& f : known) last_seen_[f.id] = frame.timestamp;
+  // A revisit the update's gate refused was a false match: its track is a new point from now on,
+  // and the landmark stays dormant.
+  std::unordered_set<std::int64_t> refused;
+  for (const auto& m : revisits) {
+    const bool gated_out = std::find(r.update.rejected_ids.begin(), r.update.rejected_ids.end(), m.landmark_id) !=
+                               r.update.rejected_ids.end() ||
+                           std::find(r.update.invalid_ids.begin(), r.update.invalid_ids.end(), m.landmark_id) !=
+                               r.update.invalid_ids.end();
+    if (gated_out) {
+      revisiting_[m.track_id] = kNotRevisit;
+      refused.insert(m.landmark_id);
+      ++r.revisits_rejected;
+    } else {
+      revisiting_[m.track_id] = m.landmark_id;
+      r.revisits.push_back(m);
+    }
+  }
+  for (const auto& f : known) {
+    if (refused.count(f.id)) continue;
+    last_seen_[f.id] = frame.timestamp;
+    dormant_.erase(f.id);
+  }
   if (triangulationActive()) {
     addLandmarksDelayed(fresh, frame.timestamp, defer, &r);
   } else {
@@ -418,6 +450,12 @@ FrameResult EkfSlam::processFrame(const CameraFrame& camera_frame) {
     r.removed_ids = makeRoomInTheMap(frame.timestamp, static_cast<int>(fresh.size()));
     r.new_ids = addLandmarks(fresh, frame.timestamp);
   }
+  if (config_.map.enabled) {
+    rememberAppearance(known);
+    rememberAppearance(fresh);
+    forgetEndedRevisits(frame, revisits);
+  }
+  r.dormant_landmarks = static_cast<int>(dormant_.size());
   if (shouldCompose(static_cast<int>(r.new_ids.size()))) {
     try {
       delayed_.beforeComposition(state_);
@@ -476,22 +514,184 @@ void EkfSlam::updateSeenMoving(const FrameResult& r) {
 }
 
 std::vector<std::int64_t> EkfSlam::makeRoomInTheMap(double t, int wanted) {
-  // Drop landmarks not seen for landmark_timeout_s, then make room for the new ones by dropping
-  // those seen longest ago (never one observed in this frame).
+  // Tracked landmarks not seen for landmark_timeout_s leave the tracked map, then those seen
+  // longest ago make room for the new ones (never one observed in this frame).
   std::vector<std::pair<double, std::int64_t>> by_age;
-  for (const auto& [id, seen] : last_seen_) by_age.emplace_back(seen, id);
+  for (const auto& [id, seen] : last_seen_)
+    if (!dormant_.count(id)) by_age.emplace_back(seen, id);
   std::sort(by_age.begin(), by_age.end());
-  std::vector<std::int64_t> drop;
+  std::vector<std::int64_t> leaving;
   size_t k = 0;
   if (config_.landmark_timeout_s >= 0.0) {
-    for (; k < by_age.size() && by_age[k].first < t - config_.landmark_timeout_s; ++k) drop.push_back(by_age[k].second);
+    for (; k < by_age.size() && by_age[k].first < t - config_.landmark_timeout_s; ++k)
+      leaving.push_back(by_age[k].second);
   }
-  while (state_.numLandmarks() - static_cast<int>(drop.size()) + wanted > config_.max_landmarks && k < by_age.size() &&
+  while (trackedLandmarks() - static_cast<int>(leaving.size()) + wanted > config_.max_landmarks && k < by_age.size() &&
          by_age[k].first < t) {
-    drop.push_back(by_age[k++].second);
+    leaving.push_back(by_age[k++].second);
   }
+  std::vector<std::int64_t> drop;
+  retire(leaving, wanted, &drop);
   removeLandmarksById(drop);
   return drop;
+}
+
+void EkfSlam::retire(const std::vector<std::int64_t>& leaving, int wanted, std::vector<std::int64_t>* drop) {
+  for (auto id : leaving) {
+    const auto i = state_.findLandmark(id);
+    if (config_.map.enabled && descriptors_.count(id) && i && wellMapped(*i))
+      dormant_.insert(id);
+    else
+      drop->push_back(id);
+  }
+  // Dormant points use the room the tracked ones leave in the map (max_landmarks bounds them all,
+  // so the cost at the bound is the same), up to map.max_dormant.
+  const int tracked = state_.numLandmarks() - static_cast<int>(dormant_.size()) - static_cast<int>(drop->size());
+  const int allowed = std::clamp(config_.max_landmarks - wanted - tracked, 0, config_.map.max_dormant);
+  int excess = static_cast<int>(dormant_.size()) - allowed;
+  if (excess <= 0) return;
+  // What a kept point is worth is the place it lets the filter recognize: the map should cover
+  // every place walked, not the last few metres. So the dormant points are binned in cells of
+  // map.dormant_spacing_m and the most crowded cell gives up a point first, the least certain of
+  // its points (the trace of its covariance): a point the filter knows well corrects the pose
+  // most when it is seen again.
+  const Eigen::MatrixXd& P = state_.covariance();
+  std::map<std::array<long, 3>, std::vector<std::pair<double, std::int64_t>>> cells;
+  for (auto id : dormant_) {
+    const auto i = state_.findLandmark(id);
+    if (!i) continue;
+    Mat3 M;
+    const Vec3 p = state_.landmark(*i).position(&M) / config_.map.dormant_spacing_m;
+    const int c = state_.landmarkIndex(*i);
+    const std::array<long, 3> key{std::lround(std::floor(p.x())), std::lround(std::floor(p.y())),
+                                  std::lround(std::floor(p.z()))};
+    cells[key].emplace_back((M * P.block<3, 3>(c, c) * M.transpose()).trace(), id);
+  }
+  for (auto& [key, points] : cells) std::sort(points.begin(), points.end());  // most certain first
+  for (; excess > 0; --excess) {
+    auto crowded = cells.begin();
+    for (auto it = cells.begin(); it != cells.end(); ++it)
+      if (it->second.size() > crowded->second.size()) crowded = it;
+    if (crowded == cells.end() || crowded->second.empty()) break;
+    const std::int64_t id = crowded->second.back().second;
+    crowded->second.pop_back();
+    dormant_.erase(id);
+    drop->push_back(id);
+  }
+}
+
+std::vector<RevisitMatch> EkfSlam::findRevisits(const CameraFrame& frame, std::vector<FeatureObservation>* fresh,
+                                                std::vector<FeatureObservation>* known) {
+  std::vector<RevisitMatch> matches;
+  if (descriptors_.empty()) return matches;
+  // The well-mapped landmarks not observed in this image (dormant, or whose track just ended),
+  // where the filter predicts them.
+  std::unordered_set<std::int64_t> observed;
+  for (const auto& f : *known) observed.insert(f.id);
+  std::vector<RevisitCandidate> candidates;
+  const Vec3 omega_b = last_gyro_ - state_.x.b_g;
+  for (int i = 0; i < state_.numLandmarks(); ++i) {
+    const std::int64_t id = state_.landmarkIds()[static_cast<size_t>(i)];
+    const auto d = descriptors_.find(id);
+    if (d == descriptors_.end() || observed.count(id) || !wellMapped(i)) continue;
+    const auto p = predictWithCovariance(state_, i, camera_, state_.x.T_b_c, config_.update, omega_b);
+    if (p) candidates.push_back({id, p->uv, p->S, d->second});
+  }
+  if (candidates.empty()) return matches;
+  // Proposals: each a landmark and the observation that would be it.
+  struct Proposal {
+    RevisitMatch match;
+    FeatureObservation obs;  ///< under its own id (a fresh track's, or the search's corner's)
+    bool searched = false;
+  };
+  std::vector<Proposal> proposals;
+  // 1) The new tracks of this image (a point the detector found again).
+  std::vector<FeatureObservation> searching;
+  for (const auto& f : *fresh)
+    if (f.descriptor && !revisiting_.count(f.id)) searching.push_back(f);
+  for (const auto& m : matchRevisits(candidates, searching, config_.map)) {
+    const auto f = std::find_if(searching.begin(), searching.end(), [&](const auto& o) { return o.id == m.track_id; });
+    proposals.push_back({m, *f, false});
+  }
+  // 2) The others: the front end looks again inside their regions.
+  std::vector<FeatureObservation> corners;
+  if (frame.search && frame.adopt) {
+    std::vector<RevisitCandidate> rest;
+    std::vector<SearchRegion> regions;
+    const double max_var = config_.map.max_search_sigma_px * config_.map.max_search_sigma_px;
+    for (const auto& c : candidates) {
+      const bool taken = std::any_of(proposals.begin(), proposals.end(),
+                                     [&](const auto& q) { return q.match.landmark_id == c.landmark_id; });
+      if (taken || !(c.S.trace() <= 2.0 * max_var)) continue;
+      rest.push_back(c);
+      regions.push_back({c.landmark_id, c.uv, c.S});
+    }
+    if (!regions.empty()) corners = frame.search(regions);
+    for (const auto& m : matchRevisits(rest, corners, config_.map)) {
+      const auto c = std::find_if(corners.begin(), corners.end(), [&](const auto& o) { return o.id == m.track_id; });
+      proposals.push_back({m, *c, true});
+    }
+  }
+  // 3) Joint compatibility: one look-alike alone in a region passes every test above, but the
+  //    matches of one image must agree on the one pose error that moved their landmarks. The
+  //    stacked innovation (with the landmarks' cross-covariances) must pass the chi^2 gate of its
+  //    dimension; the match that disagrees most leaves until it does, and fewer than
+  //    map.min_joint_revisits agreeing matches are none.
+  const double joint_gate = config_.update.gate_probability;
+  while (static_cast<int>(proposals.size()) >= std::max(1, config_.map.min_joint_revisits)) {
+    std::vector<FeatureObservation> as_landmarks;
+    as_landmarks.reserve(proposals.size());
+    for (const auto& q : proposals) as_landmarks.push_back({q.match.landmark_id, q.obs.uv, std::nullopt});
+    const JointInnovation j = jointInnovation(state_, as_landmarks, camera_, state_.x.T_b_c, config_.update, omega_b);
+    if (j.valid && j.nis <= chiSquaredQuantile(joint_gate, 2.0 * static_cast<double>(proposals.size()))) break;
+    const size_t worst =
+        j.valid ? static_cast<size_t>(std::max_element(j.each.begin(), j.each.end()) - j.each.begin()) : 0;
+    proposals.erase(proposals.begin() + static_cast<std::ptrdiff_t>(worst));
+  }
+  if (static_cast<int>(proposals.size()) < config_.map.min_joint_revisits) return matches;
+  // The agreeing matches observe their landmarks under their ids; a searched corner becomes a
+  // track of the front end, which observes the landmark from then on.
+  for (const auto& q : proposals) {
+    RevisitMatch m = q.match;
+    if (q.searched) {
+      m.track_id = frame.adopt(q.obs);
+    } else {
+      fresh->erase(std::find_if(fresh->begin(), fresh->end(), [&](const auto& o) { return o.id == q.obs.id; }));
+    }
+    known->push_back(q.obs);
+    known->back().id = m.landmark_id;
+    matches.push_back(m);
+  }
+  return matches;
+}
+
+bool EkfSlam::wellMapped(int i) const {
+  Mat3 M;
+  const Vec3 p = state_.landmark(i).position(&M);
+  const int c = state_.landmarkIndex(i);
+  const double var = (M * state_.covariance().block<3, 3>(c, c) * M.transpose()).trace();
+  const double distance = (p - state_.x.p_s_b).norm();
+  return std::isfinite(var) && var <= std::pow(config_.map.max_relative_sigma * distance, 2);
+}
+
+void EkfSlam::rememberAppearance(const std::vector<FeatureObservation>& observed) {
+  for (const auto& f : observed)
+    if (f.descriptor && !descriptors_.count(f.id) && state_.findLandmark(f.id)) descriptors_[f.id] = *f.descriptor;
+}
+
+void EkfSlam::forgetEndedRevisits(const CameraFrame& frame, const std::vector<RevisitMatch>& started) {
+  if (revisiting_.empty()) return;
+  std::unordered_set<std::int64_t> live;
+  for (const auto& f : frame.features) live.insert(f.id);
+  for (const auto& m : started) live.insert(m.track_id);  // adopted in this image: seen from the next on
+  for (auto it = revisiting_.begin(); it != revisiting_.end();)
+    it = live.count(it->first) ? std::next(it) : revisiting_.erase(it);
+}
+
+void EkfSlam::forgetMap() {
+  descriptors_.clear();
+  dormant_.clear();
+  revisiting_.clear();
 }
 
 std::vector<std::int64_t> EkfSlam::addLandmarks(const std::vector<FeatureObservation>& fresh, double t) {
@@ -536,7 +736,7 @@ void EkfSlam::addLandmarksDelayed(const std::vector<FeatureObservation>& fresh, 
   // does not take the waiting ones early (a sway's two views are what the rules keep out). At
   // rest by the IMU they enter at the prior depth, as without the delay.
   const bool wait = seen_moving_ || defer;
-  const int fill = defer ? 0 : config_.triangulation.min_map_landmarks - (state_.numLandmarks() - delayed_.clones());
+  const int fill = defer ? 0 : config_.triangulation.min_map_landmarks - (trackedLandmarks() - delayed_.clones());
   const DelayedLandmarks::Selection sel = delayed_.select(state_, fresh, camera_, state_.x.T_b_c, config_.triangulation,
                                                           pixel_var, config_.update.gate_probability, wait,
                                                           1.0 / newLandmarkDepth(), fill, config_.inverse_depth_sigma);

@@ -62,6 +62,14 @@ std::string EkfSlamConfig::validate() const {
   checkRange(err, "max_landmarks", max_landmarks);
   checkRange(err, "composition_new_landmarks", composition_new_landmarks);
   checkRange(err, "landmark_timeout_s", landmark_timeout_s);
+  checkRange(err, "map_max_dormant_landmarks", map.max_dormant);
+  checkRange(err, "map_max_descriptor_distance_bits", map.max_descriptor_distance);
+  checkRange(err, "map_dormant_spacing_m", map.dormant_spacing_m);
+  checkRange(err, "map_max_relative_sigma", map.max_relative_sigma);
+  checkRange(err, "map_min_joint_revisits", map.min_joint_revisits);
+  checkRange(err, "map_descriptor_ratio", map.descriptor_ratio);
+  checkRange(err, "map_search_gate_probability", map.search_gate_probability);
+  checkRange(err, "map_max_search_sigma_px", map.max_search_sigma_px);
   checkRange(err, "max_imu_gap_s", max_imu_gap_s);
   err << imu_check.validate();
   checkRange(err, "imu_gap_accel_sigma_mps2", imu_gap_accel_sigma_mps2);

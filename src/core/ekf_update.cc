@@ -102,6 +102,55 @@ std::vector<AcceptedObservation> gateObservations(const FilterState& state,
 }
 }  // namespace
 
+std::optional<PredictedPixel> predictWithCovariance(const FilterState& state, int landmark_index,
+                                                    const CameraModel& camera, const CameraExtrinsics& T_b_c,
+                                                    const UpdateParams& params, const Vec3& omega_b) {
+  const double row_time_per_px = camera.height() > 0 ? params.readout_time_s / camera.height() : 0.0;
+  const ObservationModel model{camera, T_b_c, omega_b, row_time_per_px};
+  AcceptedObservation a;
+  a.id = state.landmarkIds()[static_cast<size_t>(landmark_index)];
+  a.measured = Eigen::Vector2d(0.0, 0.5 * camera.height());  // the middle row: no readout shift
+  if (!model.linearize(state, 0.0, &a)) return std::nullopt;
+  PredictedPixel out;
+  out.uv = a.measured - a.residual;  // h(x)
+  if (!camera.inImage(out.uv)) return std::nullopt;
+  Eigen::MatrixXd PHt, S;
+  innovationCovariance(state.covariance(), {rowsOf(a, params.pixel_noise_px * params.pixel_noise_px)}, &PHt, &S);
+  out.S = S;
+  return out;
+}
+
+JointInnovation jointInnovation(const FilterState& state, const std::vector<FeatureObservation>& observations,
+                                const CameraModel& camera, const CameraExtrinsics& T_b_c, const UpdateParams& params,
+                                const Vec3& omega_b) {
+  const double r_var = params.pixel_noise_px * params.pixel_noise_px;
+  const double row_time_per_px = camera.height() > 0 ? params.readout_time_s / camera.height() : 0.0;
+  const ObservationModel model{camera, T_b_c, omega_b, row_time_per_px};
+  std::vector<AcceptedObservation> acc;
+  JointInnovation out;
+  for (const auto& obs : observations) {
+    AcceptedObservation a;
+    a.id = obs.id;
+    a.measured = obs.uv;
+    if (!obs.uv.allFinite() || !model.linearize(state, 0.0, &a)) return out;
+    acc.push_back(a);
+  }
+  const std::vector<MeasurementRows> rows = rowsOf(acc, r_var);
+  Eigen::MatrixXd PHt, S;
+  innovationCovariance(state.covariance(), rows, &PHt, &S);
+  const Eigen::VectorXd r = stackedResidual(rows);
+  const Eigen::LLT<Eigen::MatrixXd> llt(S);
+  if (llt.info() != Eigen::Success) return out;
+  out.nis = r.dot(llt.solve(r));
+  for (size_t i = 0; i < acc.size(); ++i) {
+    const auto k = static_cast<Eigen::Index>(2 * i);
+    const Eigen::Vector2d ri = r.segment<2>(k);
+    out.each.push_back(ri.dot(S.block<2, 2>(k, k).ldlt().solve(ri)));
+  }
+  out.valid = std::isfinite(out.nis);
+  return out;
+}
+
 UpdateResult ekfUpdate(FilterState& state, const std::vector<FeatureObservation>& observations,
                        const CameraModel& camera, const CameraExtrinsics& T_b_c, const UpdateParams& params,
                        const Vec3& omega_b) {

@@ -61,7 +61,62 @@ cv::Mat toTrackingResolution(const cv::Mat& img, const CameraIntrinsics& trackin
 }
 
 FeatureTracker::FeatureTracker(const CameraModel& camera, const TrackerParams& params)
-    : camera_(camera), params_(params) {}
+    : camera_(camera), params_(params), orb_(cv::ORB::create()) {}
+
+std::vector<std::optional<Descriptor>> FeatureTracker::describe(const cv::Mat& img,
+                                                                const std::vector<cv::Point2f>& pts) const {
+  std::vector<std::optional<Descriptor>> out(pts.size());
+  if (pts.empty()) return out;
+  std::vector<cv::KeyPoint> kps;
+  for (size_t i = 0; i < pts.size(); ++i) kps.emplace_back(pts[i], 31.0f, -1.0f, 0.0f, 0, static_cast<int>(i));
+  cv::Mat desc;
+  orb_->compute(img, kps, desc);  // drops the points too near the border; class_id says which is which
+  for (size_t k = 0; k < kps.size() && static_cast<int>(k) < desc.rows; ++k) {
+    Descriptor d;
+    std::copy(desc.ptr<std::uint8_t>(static_cast<int>(k)), desc.ptr<std::uint8_t>(static_cast<int>(k)) + d.size(),
+              d.begin());
+    out[static_cast<size_t>(kps[k].class_id)] = d;
+  }
+  return out;
+}
+
+std::vector<FeatureObservation> FeatureTracker::searchCorners(const cv::Mat& img,
+                                                              const std::vector<SearchRegion>& regions) {
+  std::vector<cv::Point2f> found;
+  const double min_d2 = params_.min_distance_px * params_.min_distance_px;
+  auto farFromAll = [&](const cv::Point2f& p) {
+    for (const auto& t : tracks_)
+      if ((t.uv.x - p.x) * (t.uv.x - p.x) + (t.uv.y - p.y) * (t.uv.y - p.y) < min_d2) return false;
+    for (const auto& q : found)  // regions overlap: a corner once
+      if ((q.x - p.x) * (q.x - p.x) + (q.y - p.y) * (q.y - p.y) < 1.0) return false;
+    return true;
+  };
+  const cv::Rect image(0, 0, img.cols, img.rows);
+  for (const auto& r : regions) {
+    const double half = std::min(64.0, 4.0 * std::sqrt(std::max(r.S(0, 0), r.S(1, 1))));
+    const cv::Rect roi = cv::Rect(static_cast<int>(r.uv.x() - half), static_cast<int>(r.uv.y() - half),
+                                  static_cast<int>(2 * half) + 1, static_cast<int>(2 * half) + 1) &
+                         image;
+    if (roi.width < 7 || roi.height < 7) continue;
+    std::vector<cv::Point2f> pts;
+    cv::goodFeaturesToTrack(img(roi), pts, 6, params_.quality_level, 3.0, cv::noArray(), 3);
+    for (const auto& p : pts) {
+      const cv::Point2f q = p + cv::Point2f(static_cast<float>(roi.x), static_cast<float>(roi.y));
+      if (farFromAll(q)) found.push_back(q);
+    }
+  }
+  std::vector<FeatureObservation> corners;
+  const auto desc = describe(img, found);
+  for (size_t i = 0; i < found.size(); ++i)
+    if (desc[i]) corners.push_back({static_cast<std::int64_t>(i), Eigen::Vector2d(found[i].x, found[i].y), desc[i]});
+  return corners;
+}
+
+std::int64_t FeatureTracker::adoptCorner(const FeatureObservation& corner) {
+  const cv::Point2f p(static_cast<float>(corner.uv.x()), static_cast<float>(corner.uv.y()));
+  tracks_.push_back({next_id_++, p, 1, {p}, corner.descriptor});
+  return tracks_.back().id;
+}
 
 void FeatureTracker::reset() {
   tracks_.clear();
@@ -157,8 +212,12 @@ CameraFrame FeatureTracker::track(double timestamp, const cv::Mat& img,
   prev_image_ = img;
   CameraFrame f;
   f.timestamp = timestamp;
-  for (const auto& t : tracks_) f.features.push_back({t.id, Eigen::Vector2d(t.uv.x, t.uv.y)});
+  for (const auto& t : tracks_) f.features.push_back({t.id, Eigen::Vector2d(t.uv.x, t.uv.y), t.descriptor});
   stats_.total = static_cast<int>(tracks_.size());
+  if (params_.descriptors) {
+    f.search = [this, img](const std::vector<SearchRegion>& regions) { return searchCorners(img, regions); };
+    f.adopt = [this](const FeatureObservation& corner) { return adoptCorner(corner); };
+  }
   return f;
 }
 
@@ -231,10 +290,16 @@ void FeatureTracker::detect(const cv::Mat& img) {
     if (count[c] >= quota) continue;
     ++count[c];
     cv::circle(mask, k.p, radius, cv::Scalar(0), -1);
-    tracks_.push_back({next_id_++, k.p, 1, {k.p}});
+    tracks_.push_back({next_id_++, k.p, 1, {k.p}, std::nullopt});
     ++added;
   }
   stats_.detected = added;
+  if (params_.descriptors && added > 0) {
+    std::vector<cv::Point2f> pts;
+    for (size_t i = tracks_.size() - static_cast<size_t>(added); i < tracks_.size(); ++i) pts.push_back(tracks_[i].uv);
+    const auto desc = describe(img, pts);
+    for (size_t i = 0; i < pts.size(); ++i) tracks_[tracks_.size() - pts.size() + i].descriptor = desc[i];
+  }
 }
 
 cv::Mat FeatureTracker::drawTracks(const cv::Mat& mono8) const {

@@ -59,6 +59,15 @@ void EkfSlamProcessor::reset(const std::string& reason) {
   startOver(reason);
 }
 
+namespace {
+/// The tracker describes its corners and searches again only for a filter that keeps its map.
+TrackerParams trackerParams(const NodeParams& p) {
+  TrackerParams t = p.tracker;
+  t.descriptors = p.filter.map.enabled;
+  return t;
+}
+}  // namespace
+
 std::string EkfSlamProcessor::reconfigure(const EkfSlamReconfigureConfig& config) {
   NodeParams next = params_;
   const std::string err = applyReconfigure(config, &next);
@@ -67,7 +76,7 @@ std::string EkfSlamProcessor::reconfigure(const EkfSlamReconfigureConfig& config
   params_ = next;
   std::string e;
   if (!pipeline_->setConfig(params_.filter, &e)) return e;
-  if (tracker_) tracker_->setParams(params_.tracker);
+  if (tracker_) tracker_->setParams(trackerParams(params_));
   if (before != params_.filter.mechanization) {
     ROS_INFO("vi_ekf_slam: mechanization %s -> %s (state and map converted)", toString(before).c_str(),
              toString(params_.filter.mechanization).c_str());
@@ -110,7 +119,7 @@ bool EkfSlamProcessor::cameraReady(const std::string& image_frame) {
       // Tracker and filter share the camera of the tracked (possibly shrunk) image.
       const CameraModel camera(trackingIntrinsics(calibration_.intrinsics(), params_.tracker.max_image_width_px));
       pipeline_->setCamera(camera, calibration_.extrinsics());
-      tracker_ = std::make_unique<FeatureTracker>(camera, params_.tracker);
+      tracker_ = std::make_unique<FeatureTracker>(camera, trackerParams(params_));
     } catch (const std::exception& e) {
       reportProblem(std::string("cannot start the filter: ") + e.what());
       pipeline_->clearCamera();

@@ -1,6 +1,8 @@
 #include "vi_ekf_slam/sim/camera_simulator.h"
 
 #include <algorithm>
+#include <cmath>
+#include <memory>
 #include <unordered_map>
 
 namespace vi_ekf_slam::sim {
@@ -26,6 +28,35 @@ TrackingCamera::TrackingCamera(const LandmarkWorld& world, const CameraModel& ca
                                const CameraSimParams& params)
     : world_(world), camera_(camera), T_b_c_(T_b_c), params_(params) {
   for (size_t i = 0; i < world_.size(); ++i) index_of_[world_[i].id] = i;
+}
+
+Descriptor landmarkPattern(std::int64_t landmark, const DescriptorSimParams& params) {
+  const std::int64_t pattern = params.texture_patterns > 0 ? landmark % params.texture_patterns : landmark;
+  std::minstd_rand g(static_cast<std::uint32_t>(static_cast<std::uint64_t>(pattern) * 2654435761ULL) | 1u);
+  Descriptor d;
+  for (auto& byte : d) byte = static_cast<std::uint8_t>((g() >> 7) & 0xff);
+  return d;
+}
+
+std::optional<Descriptor> TrackingCamera::describe(std::int64_t landmark, std::uint64_t salt, const Vec3& p_n_c) {
+  const DescriptorSimParams& p = params_.descriptors;
+  if (!p.enabled) return std::nullopt;
+  const Vec3 ray = p_n_c - world_.at(static_cast<size_t>(landmark)).p_n;
+  const double distance = std::max(1e-6, ray.norm());
+  const auto first = first_view_.emplace(landmark, std::make_pair(ray / distance, distance)).first->second;
+  const double angle = std::acos(std::clamp(first.first.dot(ray / distance), -1.0, 1.0));
+  const double mean_bits =
+      p.same_view_bits + p.bits_per_rad * angle + p.bits_per_log_scale * std::abs(std::log(distance / first.second));
+  const double q = std::clamp(mean_bits / 256.0, 0.0, 0.5);  // 0.5: no resemblance left
+  // The track's own randomness (not the frame's generator): descriptors change nothing else.
+  std::minstd_rand g(static_cast<std::uint32_t>(static_cast<std::uint64_t>(landmark) * 2654435761ULL + salt * 97ULL) |
+                     1u);
+  std::bernoulli_distribution flip(q);
+  Descriptor d = landmarkPattern(landmark, p);
+  for (auto& byte : d)
+    for (int bit = 0; bit < 8; ++bit)
+      if (flip(g)) byte ^= static_cast<std::uint8_t>(1u << bit);
+  return d;
 }
 
 std::int64_t trackId(std::int64_t landmark, std::int64_t k, size_t world_size) {
@@ -70,6 +101,7 @@ CameraFrame TrackingCamera::observe(const TrajectorySample& s, std::mt19937_64* 
   }
   if (rng) std::shuffle(candidates.begin(), candidates.end(), *rng);
   std::vector<bool> used(candidates.size(), false);
+  const Vec3 p_n_c = s.p_n_b + s.q_n_b * T_b_c_.p_b_c;
   while (static_cast<int>(kept.size()) < params_.max_features) {
     int best = -1, best_occ = 1 << 30;
     for (size_t i = 0; i < candidates.size(); ++i) {
@@ -83,7 +115,9 @@ CameraFrame TrackingCamera::observe(const TrajectorySample& s, std::mt19937_64* 
     if (best < 0) break;
     used[static_cast<size_t>(best)] = true;
     const std::int64_t landmark = candidates[static_cast<size_t>(best)];
-    kept.push_back({landmark, trackId(landmark, tracks_started_[landmark]++, world_.size())});
+    const std::int64_t k = tracks_started_[landmark]++;
+    kept.push_back(
+        {landmark, trackId(landmark, k, world_.size()), describe(landmark, static_cast<std::uint64_t>(k), p_n_c)});
     ++occupancy[static_cast<size_t>(cellOf(uv_of[landmark]))];
   }
   tracked_ = kept;
@@ -96,9 +130,49 @@ CameraFrame TrackingCamera::observe(const TrajectorySample& s, std::mt19937_64* 
       const double du = n(*rng), dv = n(*rng);
       uv += params_.pixel_noise_px * Eigen::Vector2d(du, dv);
     }
-    f.features.push_back({track.id, uv});
+    f.features.push_back({track.id, uv, track.descriptor});
+  }
+  ++frames_;
+  if (params_.descriptors.enabled) {
+    std::vector<std::pair<std::int64_t, Eigen::Vector2d>> untracked;
+    for (auto landmark : visible)
+      if (!isKept(landmark)) untracked.emplace_back(landmark, uv_of[landmark]);
+    offerSearch(&f, std::move(untracked), p_n_c);
   }
   return f;
+}
+
+void TrackingCamera::offerSearch(CameraFrame* frame, std::vector<std::pair<std::int64_t, Eigen::Vector2d>> untracked,
+                                 const Vec3& p_n_c) {
+  const std::uint64_t image = frames_;
+  // The corners returned by the last search, by their id (their index): what adopt() takes.
+  auto found = std::make_shared<std::vector<std::int64_t>>();
+  frame->search = [this, untracked, p_n_c, image, found](const std::vector<SearchRegion>& regions) {
+    std::vector<FeatureObservation> corners;
+    found->clear();
+    for (const auto& [landmark, uv_true] : untracked) {
+      const bool inside = std::any_of(regions.begin(), regions.end(), [&](const SearchRegion& r) {
+        const Eigen::Vector2d e = uv_true - r.uv;
+        return e.dot(r.S.ldlt().solve(e)) <= 16.0;  // a 4-sigma ellipse
+      });
+      if (!inside) continue;
+      // The draws of this landmark in this image: found or not, its pixel noise, its appearance.
+      std::minstd_rand g(
+          static_cast<std::uint32_t>((static_cast<std::uint64_t>(landmark) * 2654435761ULL) ^ (image * 40503ULL)) | 1u);
+      if (!std::bernoulli_distribution(params_.descriptors.redetect_probability)(g)) continue;
+      std::normal_distribution<double> n(0.0, 1.0);
+      const Eigen::Vector2d uv = uv_true + params_.pixel_noise_px * Eigen::Vector2d(n(g), n(g));
+      corners.push_back({static_cast<std::int64_t>(found->size()), uv, describe(landmark, (image << 24) + 7, p_n_c)});
+      found->push_back(landmark);
+    }
+    return corners;
+  };
+  frame->adopt = [this, found](const FeatureObservation& corner) {
+    const std::int64_t landmark = found->at(static_cast<size_t>(corner.id));
+    const std::int64_t k = tracks_started_[landmark]++;
+    tracked_.push_back({landmark, trackId(landmark, k, world_.size()), corner.descriptor});
+    return tracked_.back().id;
+  };
 }
 
 }  // namespace vi_ekf_slam::sim

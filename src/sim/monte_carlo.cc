@@ -170,6 +170,12 @@ RunResult runMonteCarloRun(const Scenario& scenario_in, const EkfSlamConfig& con
     m.composed = rec.result.composed;
     m.stationary = rec.result.zero_velocity_applied;
     m.parallax_px = rec.result.stationary.parallax_px;
+    for (const auto& v : rec.result.revisits) {
+      ++m.revisits;
+      if (&landmarkOfTrack(v.track_id, sc.world) != &landmarkOfTrack(v.landmark_id, sc.world)) ++m.false_revisits;
+    }
+    m.revisits_refused = rec.result.revisits_rejected;
+    m.dormant = rec.result.dormant_landmarks;
     m.e_td = sc.cam.time_offset_s - s.x.t_d;
     m.s_td = std::sqrt(std::max(0.0, s.covariance()(idx::kTd, idx::kTd)));
     p_true.push_back(m.p_true);
@@ -259,6 +265,10 @@ ConsistencySummary summarize(const std::string& name, const std::vector<RunResul
   std::vector<double> ate, ateq, fin, gam, rtf, revisit;
   for (const auto& r : runs) {
     if (r.revisits.pairs > 0) revisit.push_back(r.revisits.ratio());
+    for (const auto& f : r.frames) {
+      s.revisits_per_run += f.revisits / static_cast<double>(runs.size());
+      s.false_revisits += f.false_revisits;
+    }
     s.ate_posyaw_runs_m.push_back(r.ate_posyaw_m);
     rtf.push_back(r.real_time_factor);
     ate.push_back(r.ate_position_m);

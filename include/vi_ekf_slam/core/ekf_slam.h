@@ -8,10 +8,12 @@
 #include <deque>
 #include <string>
 #include <unordered_map>
+#include <unordered_set>
 #include <vector>
 
 #include "vi_ekf_slam/core/camera_model.h"
 #include "vi_ekf_slam/core/dynamic_initializer.h"
+#include "vi_ekf_slam/core/map_memory.h"
 #include "vi_ekf_slam/core/ekf_slam_config.h"
 #include "vi_ekf_slam/core/navigation_output.h"
 #include "vi_ekf_slam/core/outlier_watch.h"
@@ -27,6 +29,11 @@ struct FrameResult {
   std::vector<std::int64_t> new_ids;
   int new_triangulated = 0;  ///< of new_ids, those triangulated (the others entered at the prior depth)
   std::vector<std::int64_t> removed_ids;
+  /// Keeping the map: landmarks whose tracks had ended, observed again through a new track (the
+  /// update accepted them) and those the update's gate refused (a false match).
+  std::vector<RevisitMatch> revisits;
+  int revisits_rejected = 0;
+  int dormant_landmarks = 0;  ///< after this frame
   bool composed = false;
   StationaryDetector::Decision stationary;  ///< the standing test of this frame
   bool zero_velocity_applied = false;       ///< stationary and the zero-velocity update passed its gate
@@ -179,6 +186,34 @@ class EkfSlam {
   /// Motion the IMU did not see: independent variances of position, velocity and attitude.
   static void addUnseenMotion(FilterState& s, const Vec3& var_p, const Vec3& var_v, const Vec3& var_psi);
   int zero_velocity_updates_ = 0;
+  // Keeping the map (map_memory.h).
+  std::unordered_map<std::int64_t, Descriptor> descriptors_;  ///< of landmarks in the state
+  std::unordered_set<std::int64_t> dormant_;                  ///< landmarks whose tracks ended, kept
+  /// A track that found a landmark again -> that landmark; kNotRevisit: its match was refused by the
+  /// update's gate, it is a new point (a track is matched once).
+  std::unordered_map<std::int64_t, std::int64_t> revisiting_;
+  static constexpr std::int64_t kNotRevisit = -1;
+  /// Landmarks being tracked (clones included, dormant ones not).
+  int trackedLandmarks() const { return state_.numLandmarks() - static_cast<int>(dormant_.size()); }
+  /// The features of tracks that found a landmark again, under that landmark's id; new matches
+  /// of fresh tracks to landmarks not observed in this image move from *fresh to *known.
+  /// With frame.search, the front end also looks again where the other landmarks are expected and
+  /// starts tracking the corners that are them (frame.adopt).
+  std::vector<RevisitMatch> findRevisits(const CameraFrame& frame, std::vector<FeatureObservation>* fresh,
+                                         std::vector<FeatureObservation>* known);
+  /// Forgets the tracks of revisiting_ that no longer appear in the frame.
+  void forgetEndedRevisits(const CameraFrame& frame, const std::vector<RevisitMatch>& started);
+  /// Forgets descriptors, dormancy and revisiting tracks (a new start).
+  void forgetMap();
+  /// Landmark i (map position) is known well enough to be kept and found again: its position's
+  /// std-dev (root of the covariance's trace) within map.max_relative_sigma of its distance.
+  bool wellMapped(int i) const;
+  /// Keeps the descriptor of every observed landmark that has none yet.
+  void rememberAppearance(const std::vector<FeatureObservation>& observed);
+  /// Landmarks leaving the tracked map: dormant (keep_map and a descriptor) or dropped (into *drop);
+  /// then dormant ones are dropped (retire's rule) until `wanted` new ones fit in max_landmarks and
+  /// at most map.max_dormant are left.
+  void retire(const std::vector<std::int64_t>& leaving, int wanted, std::vector<std::int64_t>* drop);
   StationaryDetector stationary_;
   DivergenceMonitor divergence_;
   OutlierWatch outlier_watch_;

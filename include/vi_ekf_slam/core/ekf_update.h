@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cstdint>
+#include <optional>
 #include <vector>
 
 #include "vi_ekf_slam/core/measurement_model.h"
@@ -45,5 +46,29 @@ struct UpdateResult {
 UpdateResult ekfUpdate(FilterState& state, const std::vector<FeatureObservation>& observations,
                        const CameraModel& camera, const CameraExtrinsics& T_b_c, const UpdateParams& params,
                        const Vec3& omega_b = Vec3::Zero());
+
+/// Where landmark `landmark_index` (map position) should appear in the image and how uncertain
+/// that is: the predicted pixel and the innovation covariance H P H^T + R [px^2] an observation of
+/// it would have (the search region for a landmark whose track ended, map_memory.h). Nothing if
+/// it cannot be predicted (behind the camera, outside the image).
+struct PredictedPixel {
+  Eigen::Vector2d uv;
+  Eigen::Matrix2d S;
+};
+/// The stacked innovation of observations of landmarks in the map (what the update would see):
+/// its NIS r^T S^-1 r with the joint S (cross-covariances included), and each observation's own
+/// NIS. valid is false if one cannot be predicted.
+struct JointInnovation {
+  bool valid = false;
+  double nis = 0.0;
+  std::vector<double> each;
+};
+JointInnovation jointInnovation(const FilterState& state, const std::vector<FeatureObservation>& observations,
+                                const CameraModel& camera, const CameraExtrinsics& T_b_c, const UpdateParams& params,
+                                const Vec3& omega_b = Vec3::Zero());
+
+std::optional<PredictedPixel> predictWithCovariance(const FilterState& state, int landmark_index,
+                                                    const CameraModel& camera, const CameraExtrinsics& T_b_c,
+                                                    const UpdateParams& params, const Vec3& omega_b = Vec3::Zero());
 
 }  // namespace vi_ekf_slam

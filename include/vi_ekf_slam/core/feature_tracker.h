@@ -7,6 +7,7 @@
 #include <cstdint>
 #include <optional>
 #include <opencv2/core.hpp>
+#include <opencv2/features2d.hpp>
 #include <string>
 #include <vector>
 
@@ -37,6 +38,9 @@ struct TrackerParams {
   /// size. Every pixel quantity of the tracker and of the filter (thresholds, pixel noise,
   /// parallax) then refers to the shrunk image. Set at start-up.
   int max_image_width_px = 800;
+  /// Describe each new corner (ORB, 256 bits) and look again where the filter expects a landmark
+  /// whose track ended (CameraFrame::search), so the map's points can be found again.
+  bool descriptors = true;
   /// Empty if usable, otherwise what is wrong.
   std::string validate() const;
 };
@@ -85,8 +89,17 @@ class FeatureTracker {
     cv::Point2f uv;
     int age;
     std::vector<cv::Point2f> history;
+    std::optional<Descriptor> descriptor;  ///< where it was detected
   };
   void detect(const cv::Mat& img);
+  /// ORB descriptors at the points (none for a point too near the border to describe).
+  std::vector<std::optional<Descriptor>> describe(const cv::Mat& img, const std::vector<cv::Point2f>& pts) const;
+  /// CameraFrame::search on `img` (the last tracked image): corners in each region (within four
+  /// of its standard deviations, at most 64 px away), away from the tracks, with descriptors.
+  std::vector<FeatureObservation> searchCorners(const cv::Mat& img, const std::vector<SearchRegion>& regions);
+  /// CameraFrame::adopt: a corner of the last search becomes a track.
+  std::int64_t adoptCorner(const FeatureObservation& corner);
+  cv::Ptr<cv::Feature2D> orb_;
   cv::Point2f predict(const cv::Point2f& uv, const Eigen::Matrix3d& R_cur_prev) const;
 
   CameraModel camera_;

@@ -3,6 +3,7 @@
 // ended gets a new track id, as a KLT tracker gives a corner it finds again a new id.
 #pragma once
 
+#include <optional>
 #include <random>
 #include <unordered_map>
 
@@ -12,6 +13,27 @@
 #include "vi_ekf_slam/sim/trajectory.h"
 
 namespace vi_ekf_slam::sim {
+
+/// The appearance a simulated tracker gives a new track (an ORB descriptor's 256 bits): its
+/// landmark's pattern with bits flipped, as many more as the view differs from the landmark's
+/// first view, so that a point seen again from another angle or distance does not always match.
+/// Each flip count is binomial around its mean; the randomness is the track's own (the pixel
+/// noise and everything else is unchanged by it).
+struct DescriptorSimParams {
+  bool enabled = true;
+  double same_view_bits = 12.0;      ///< mean bits differing between two detections from the same view [bits]
+  double bits_per_rad = 110.0;       ///< more per radian between the viewing directions [bits/rad]
+  double bits_per_log_scale = 60.0;  ///< more per unit of |ln(distance / first distance)| [bits]
+  /// A front end that looks again where the filter expects a landmark finds its corner with this
+  /// probability (detection is not perfectly repeatable) [probability].
+  double redetect_probability = 0.8;
+  /// Repeated texture: 0, every landmark looks different; N > 0, landmark i has pattern i mod N
+  /// (N patterns repeated over the world, a corridor of identical doors) [count].
+  int texture_patterns = 0;
+};
+
+/// The pattern of landmark index i (256 random bits, a function of the pattern's number).
+Descriptor landmarkPattern(std::int64_t landmark, const DescriptorSimParams& params);
 
 struct CameraSimParams {
   double rate_hz = 28.0;
@@ -25,6 +47,7 @@ struct CameraSimParams {
   /// Camera-IMU clock offset of the simulated rig [s]: a frame taken at true (IMU) time t is
   /// stamped t - time_offset_s, so t_imu = t_image + time_offset_s.
   double time_offset_s = 0.0;
+  DescriptorSimParams descriptors;
 };
 
 /// Noise-free projections of every landmark of `world` visible from the body pose at `sample`
@@ -59,7 +82,16 @@ class TrackingCamera {
   struct Track {
     std::int64_t landmark;  ///< index into the world
     std::int64_t id;        ///< the track id the estimator sees
+    std::optional<Descriptor> descriptor;
   };
+  /// A landmark's appearance seen from the camera at p_n_c; `salt` makes the draw (a track's
+  /// number, or an image's for a search).
+  std::optional<Descriptor> describe(std::int64_t landmark, std::uint64_t salt, const Vec3& p_n_c);
+  /// CameraFrame::search and adopt for the frame just observed: the visible landmarks that are not
+  /// tracked (index, noisy pixel), found inside a region with redetect_probability.
+  void offerSearch(CameraFrame* frame, std::vector<std::pair<std::int64_t, Eigen::Vector2d>> untracked,
+                   const Vec3& p_n_c);
+  std::uint64_t frames_ = 0;  ///< images observed (a search's draws depend on it)
   const LandmarkWorld& world_;
   CameraModel camera_;
   CameraExtrinsics T_b_c_;
@@ -67,6 +99,8 @@ class TrackingCamera {
   std::unordered_map<std::int64_t, size_t> index_of_;  ///< world id -> index in the world
   std::vector<Track> tracked_;
   std::unordered_map<std::int64_t, std::int64_t> tracks_started_;  ///< per landmark index
+  /// Per landmark index: the first view's direction (landmark to camera, unit) and distance [m].
+  std::unordered_map<std::int64_t, std::pair<Vec3, double>> first_view_;
 };
 
 }  // namespace vi_ekf_slam::sim

@@ -37,6 +37,12 @@ struct FrameMetrics {
   double update_ms = 0.0;    ///< filter time for this frame (propagation + update + init + composition)
   double e_td = 0.0;         ///< camera-IMU time offset error (true - estimate) [s]
   double s_td = 0.0;         ///< its 1-sigma [s]
+  /// Keeping the map: dormant landmarks observed again through a new track (accepted by the
+  /// update), those of them that were another point (the simulator knows), and matches refused.
+  int revisits = 0;
+  int false_revisits = 0;
+  int revisits_refused = 0;
+  int dormant = 0;  ///< dormant landmarks after the frame
 };
 
 struct RunResult {
@@ -79,6 +85,10 @@ struct ConsistencySummary {
   /// Over the runs that came back to places: the mean of their error on return over their error
   /// when the place was first seen (eval::RevisitErrors::ratio; NaN when no run came back).
   double revisit_error_ratio = std::nan("");
+  /// Keeping the map: accepted re-observations of dormant landmarks per run, and how many of all
+  /// the runs' were of another point (a false closure the filter believed).
+  double revisits_per_run = 0.0;
+  int false_revisits = 0;
   double real_time_factor = 0.0;     ///< mean over runs
   double ate_orientation_deg = 0.0;  ///< mean over runs of the per-run orientation RMSE
   double final_position_error_m = 0.0;

@@ -1,0 +1,71 @@
+// Keeping the map: a landmark whose track has ended stays in the state as *dormant* (it is an
+// EKF-SLAM: its correlation with the pose is what corrects the pose when the place is seen
+// again), and a new track that is the same point is recognized by its appearance inside the
+// region where the filter predicts the landmark, then observes it as any other track does. The
+// search region is the landmark's predicted pixel with its innovation covariance (the
+// uncertainty the filter already carries), so a repeated texture outside it cannot be taken;
+// inside it, two look-alikes fail the ratio test and neither is taken.
+#pragma once
+
+#include <cstdint>
+#include <vector>
+
+#include "vi_ekf_slam/core/so3.h"
+#include "vi_ekf_slam/core/types.h"
+
+namespace vi_ekf_slam {
+
+struct MapMemoryParams {
+  /// Keep landmarks whose tracks ended (with a descriptor) as dormant, and find them again
+  /// (experimental: docs/evaluation.md has what it gains and costs).
+  bool enabled = false;
+  /// Dormant landmarks kept [count], in the room the tracked ones leave below max_landmarks;
+  /// beyond it the most crowded places give up points.
+  int max_dormant = 100;
+  /// The matches of one image must agree (joint compatibility of their stacked innovation at the
+  /// update's gate probability); fewer than this many agreeing matches are none [count].
+  int min_joint_revisits = 2;
+  /// Only a landmark whose position's std-dev is at most this fraction of its distance is kept
+  /// as dormant and searched for: a point whose depth the images have not settled would be found
+  /// again in the wrong place [ratio].
+  double max_relative_sigma = 0.1;
+  /// Dormant points are counted in cells of this size: the cell with the most gives up its least
+  /// certain point first, so the kept map covers every place walked [m].
+  double dormant_spacing_m = 1.0;
+  /// A match's Hamming distance may be at most this [bits of 256] (ORB-SLAM's strict threshold).
+  int max_descriptor_distance = 50;
+  /// The best match's distance must be below this fraction of the second best's, both from the
+  /// landmark's side (features in its region) and from the feature's (landmarks whose region holds
+  /// it) [ratio].
+  double descriptor_ratio = 0.8;
+  /// The search region: the chi^2 gate (2 dof) of this probability on the predicted pixel.
+  double search_gate_probability = 0.99;
+  /// A dormant landmark is searched for only while its predicted pixel's std-dev (the larger axis
+  /// of its innovation covariance) is below this [px]: a region wider than that holds look-alikes.
+  double max_search_sigma_px = 40.0;
+};
+
+int hammingDistance(const Descriptor& a, const Descriptor& b);
+
+/// A landmark that may be seen again: its predicted pixel, the innovation covariance of that
+/// prediction (pixel noise included) and its appearance.
+struct RevisitCandidate {
+  std::int64_t landmark_id = 0;
+  Eigen::Vector2d uv = Eigen::Vector2d::Zero();     ///< [px]
+  Eigen::Matrix2d S = Eigen::Matrix2d::Identity();  ///< [px^2]
+  Descriptor descriptor{};
+};
+
+struct RevisitMatch {
+  std::int64_t track_id = 0;
+  std::int64_t landmark_id = 0;
+  int distance = 0;  ///< [bits]
+};
+
+/// The features (with descriptors) that are landmarks of `candidates` seen again: inside the
+/// landmark's search region, within max_descriptor_distance, the mutual best, and passing the
+/// ratio test on both sides. Candidates wider than max_search_sigma_px are not searched.
+std::vector<RevisitMatch> matchRevisits(const std::vector<RevisitCandidate>& candidates,
+                                        const std::vector<FeatureObservation>& features, const MapMemoryParams& params);
+
+}  // namespace vi_ekf_slam

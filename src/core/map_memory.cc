@@ -1,0 +1,67 @@
+#include "vi_ekf_slam/core/map_memory.h"
+
+#include <Eigen/Eigenvalues>
+#include <bitset>
+#include <limits>
+
+#include "vi_ekf_slam/core/chi_squared.h"
+
+namespace vi_ekf_slam {
+
+int hammingDistance(const Descriptor& a, const Descriptor& b) {
+  int d = 0;
+  for (size_t i = 0; i < a.size(); ++i) d += static_cast<int>(std::bitset<8>(a[i] ^ b[i]).count());
+  return d;
+}
+
+std::vector<RevisitMatch> matchRevisits(const std::vector<RevisitCandidate>& candidates,
+                                        const std::vector<FeatureObservation>& features,
+                                        const MapMemoryParams& params) {
+  constexpr int kNone = std::numeric_limits<int>::max();
+  const double gate = chiSquaredQuantile(params.search_gate_probability, 2.0);
+  const double max_var = params.max_search_sigma_px * params.max_search_sigma_px;
+  // Best and second-best distances from each side, over the pairs inside the search region.
+  struct Best {
+    int index = -1;
+    int distance = kNone;
+    int second = kNone;
+    void offer(int i, int d) {
+      if (d < distance) {
+        second = distance;
+        distance = d;
+        index = i;
+      } else if (d < second) {
+        second = d;
+      }
+    }
+    bool passes(double ratio) const { return second == kNone || distance < ratio * second; }
+  };
+  std::vector<Best> of_landmark(candidates.size()), of_feature(features.size());
+  for (size_t c = 0; c < candidates.size(); ++c) {
+    const RevisitCandidate& lm = candidates[c];
+    Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d> eig(lm.S);
+    if (eig.info() != Eigen::Success || !(eig.eigenvalues().maxCoeff() <= max_var) ||
+        !(eig.eigenvalues().minCoeff() > 0.0))
+      continue;
+    const Eigen::Matrix2d S_inv = lm.S.inverse();
+    for (size_t f = 0; f < features.size(); ++f) {
+      if (!features[f].descriptor || !features[f].uv.allFinite()) continue;
+      const Eigen::Vector2d e = features[f].uv - lm.uv;
+      if (!(e.dot(S_inv * e) <= gate)) continue;
+      const int d = hammingDistance(lm.descriptor, *features[f].descriptor);
+      of_landmark[c].offer(static_cast<int>(f), d);
+      of_feature[f].offer(static_cast<int>(c), d);
+    }
+  }
+  std::vector<RevisitMatch> matches;
+  for (size_t c = 0; c < candidates.size(); ++c) {
+    const Best& b = of_landmark[c];
+    if (b.index < 0 || b.distance > params.max_descriptor_distance || !b.passes(params.descriptor_ratio)) continue;
+    const Best& back = of_feature[static_cast<size_t>(b.index)];
+    if (back.index != static_cast<int>(c) || !back.passes(params.descriptor_ratio)) continue;
+    matches.push_back({features[static_cast<size_t>(b.index)].id, candidates[c].landmark_id, b.distance});
+  }
+  return matches;
+}
+
+}  // namespace vi_ekf_slam
