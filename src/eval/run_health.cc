@@ -11,6 +11,7 @@ namespace vi_ekf_slam::eval {
 nlohmann::ordered_json runHealth(const std::vector<StatusSample>& tr, int resets, double input_s, double wall_s) {
   nlohmann::ordered_json h;
   double path = 0.0, tracks = 0.0, accepted = 0.0, rejected = 0.0, nis = 0.0, ms = 0.0, tracker_ms = 0.0;
+  int revisits = 0;
   int nis_n = 0, min_tracks = tr.empty() ? 0 : 1 << 30;
   std::vector<double> speeds;
   for (size_t i = 0; i < tr.size(); ++i) {
@@ -20,6 +21,7 @@ nlohmann::ordered_json runHealth(const std::vector<StatusSample>& tr, int resets
     accepted += s.accepted;
     rejected += s.rejected;
     ms += s.processing_ms;
+    revisits += s.revisits;
     tracker_ms += s.tracker_ms;
     if (s.accepted > 0) {
       nis += s.nis_per_dof;
@@ -49,6 +51,8 @@ nlohmann::ordered_json runHealth(const std::vector<StatusSample>& tr, int resets
   h["tracker_ms_mean"] = tracker_ms / n;
   h["reading_ms_mean"] = tr.empty() ? 0.0 : std::max(0.0, 1000.0 * wall_s / n - ms / n);
   h["real_time_factor"] = wall_s > 0.0 ? input_s / wall_s : 0.0;  // offline: input reading included
+  h["revisits"] = revisits;
+  h["dormant_landmarks_final"] = tr.empty() ? 0 : tr.back().dormant;
   return h;
 }
 
@@ -65,7 +69,13 @@ std::string healthLine(const std::string& name, const nlohmann::ordered_json& h)
       h["accepted_per_image"].get<double>(), h["rejected_per_image"].get<double>(), h["nis_per_dof_mean"].get<double>(),
       h["time_offset_s"].get<double>(), h["time_offset_sigma_s"].get<double>(), h["processing_ms_mean"].get<double>(),
       h["tracker_ms_mean"].get<double>(), h["reading_ms_mean"].get<double>(), h["real_time_factor"].get<double>());
-  return buf;
+  std::string out = buf;
+  if (h.contains("revisits") && h["revisits"].get<int>() > 0) {
+    std::snprintf(buf, sizeof(buf), "  map kept: dormant landmarks found again %d times, %d dormant at the end\n",
+                  h["revisits"].get<int>(), h["dormant_landmarks_final"].get<int>());
+    out += buf;
+  }
+  return out;
 }
 
 std::vector<ReportColumn> healthColumns() {
@@ -88,13 +98,14 @@ std::vector<ReportColumn> healthColumns() {
 void writeTrace(const std::string& path, const std::vector<StatusSample>& samples) {
   std::ofstream f(path);
   f << "t,x,y,z,tracks,accepted,rejected,nis_per_dof,time_offset_s,time_offset_sigma_s,resets,processing_ms,"
-       "tracker_ms,landmarks,new_landmarks,deferred,removed,stationary\n"
+       "tracker_ms,landmarks,new_landmarks,deferred,removed,stationary,dormant,revisits\n"
     << std::setprecision(12);
   for (const StatusSample& s : samples) {
     f << s.t << "," << s.p.x() << "," << s.p.y() << "," << s.p.z() << "," << s.tracks << "," << s.accepted << ","
       << s.rejected << "," << s.nis_per_dof << "," << s.time_offset_s << "," << s.time_offset_sigma_s << "," << s.resets
       << "," << s.processing_ms << "," << s.tracker_ms << "," << s.landmarks << "," << s.new_landmarks << ","
-      << s.deferred << "," << s.removed << "," << static_cast<int>(s.stationary) << "\n";
+      << s.deferred << "," << s.removed << "," << static_cast<int>(s.stationary) << "," << s.dormant << ","
+      << s.revisits << "\n";
   }
 }
 

@@ -65,6 +65,8 @@ void RecordingSink::status(const vi_ekf_slam::FilterStatus& s) {
   x.new_landmarks = s.new_landmarks;
   x.deferred = s.deferred_features;
   x.removed = s.removed_landmarks;
+  x.dormant = s.dormant_landmarks;
+  x.revisits = s.revisits;
   x.stationary = s.stationary;
   trace.push_back(x);
 }

@@ -198,6 +198,9 @@ vi_ekf_slam::FilterStatus toFilterStatus(const EkfSlam& filter, const NavState& 
   s.deferred_features = r.deferred_features;
   s.waiting_features = r.waiting_features;
   s.removed_landmarks = static_cast<int>(r.removed_ids.size());
+  s.dormant_landmarks = r.dormant_landmarks;
+  s.revisits = static_cast<int>(r.revisits.size());
+  s.refused_revisits = r.revisits_rejected;
   s.accepted_observations = r.update.accepted;
   s.rejected_observations = static_cast<int>(r.update.rejected_ids.size());
   s.gate_probability = r.gate_probability;

@@ -23,6 +23,7 @@ struct StatusSample {
   int resets = 0;  ///< since the start
   double processing_ms = 0.0, tracker_ms = 0.0;
   int landmarks = 0, new_landmarks = 0, deferred = 0, removed = 0;
+  int dormant = 0, revisits = 0;  ///< keep_map: dormant landmarks, and those observed again in this image
   bool stationary = false;
 };
 
