@@ -61,7 +61,7 @@ cv::Mat toTrackingResolution(const cv::Mat& img, const CameraIntrinsics& trackin
 }
 
 FeatureTracker::FeatureTracker(const CameraModel& camera, const TrackerParams& params)
-    : camera_(camera), params_(params), orb_(cv::ORB::create()) {}
+    : camera_(camera), params_(params) {}
 
 std::vector<std::optional<Descriptor>> FeatureTracker::describe(const cv::Mat& img,
                                                                 const std::vector<cv::Point2f>& pts) const {

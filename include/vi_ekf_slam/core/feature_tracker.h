@@ -99,7 +99,7 @@ class FeatureTracker {
   std::vector<FeatureObservation> searchCorners(const cv::Mat& img, const std::vector<SearchRegion>& regions);
   /// CameraFrame::adopt: a corner of the last search becomes a track.
   std::int64_t adoptCorner(const FeatureObservation& corner);
-  cv::Ptr<cv::Feature2D> orb_;
+  cv::Ptr<cv::Feature2D> orb_ = cv::ORB::create();
   cv::Point2f predict(const cv::Point2f& uv, const Eigen::Matrix3d& R_cur_prev) const;
 
   CameraModel camera_;

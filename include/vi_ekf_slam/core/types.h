@@ -31,7 +31,7 @@ struct FeatureObservation {
   Eigen::Vector2d uv = Eigen::Vector2d::Zero();  ///< [px]
   /// The track's appearance where it was detected (the same on every image of the track), if the
   /// front end gives one: what finds the point again once the track has ended (map_memory.h).
-  std::optional<Descriptor> descriptor;
+  std::optional<Descriptor> descriptor = std::nullopt;
 };
 
 /// Where the filter expects a landmark whose track ended: its predicted pixel and the innovation
