@@ -555,17 +555,15 @@ void EkfSlam::retire(const std::vector<std::int64_t>& leaving, int wanted, std::
   // map.dormant_spacing_m and the most crowded cell gives up a point first, the least certain of
   // its points (the trace of its covariance): a point the filter knows well corrects the pose
   // most when it is seen again.
-  const Eigen::MatrixXd& P = state_.covariance();
   std::map<std::array<long, 3>, std::vector<std::pair<double, std::int64_t>>> cells;
   for (auto id : dormant_) {
     const auto i = state_.findLandmark(id);
     if (!i) continue;
-    Mat3 M;
-    const Vec3 p = state_.landmark(*i).position(&M) / config_.map.dormant_spacing_m;
-    const int c = state_.landmarkIndex(*i);
+    const auto [position, variance] = landmarkPositionVariance(*i);
+    const Vec3 p = position / config_.map.dormant_spacing_m;
     const std::array<long, 3> key{std::lround(std::floor(p.x())), std::lround(std::floor(p.y())),
                                   std::lround(std::floor(p.z()))};
-    cells[key].emplace_back((M * P.block<3, 3>(c, c) * M.transpose()).trace(), id);
+    cells[key].emplace_back(variance, id);
   }
   for (auto& [key, points] : cells) std::sort(points.begin(), points.end());  // most certain first
   for (; excess > 0; --excess) {
@@ -665,11 +663,15 @@ std::vector<RevisitMatch> EkfSlam::findRevisits(const CameraFrame& frame, std::v
   return matches;
 }
 
-bool EkfSlam::wellMapped(int i) const {
+std::pair<Vec3, double> EkfSlam::landmarkPositionVariance(int i) const {
   Mat3 M;
   const Vec3 p = state_.landmark(i).position(&M);
   const int c = state_.landmarkIndex(i);
-  const double var = (M * state_.covariance().block<3, 3>(c, c) * M.transpose()).trace();
+  return {p, (M * state_.covariance().block<3, 3>(c, c) * M.transpose()).trace()};
+}
+
+bool EkfSlam::wellMapped(int i) const {
+  const auto [p, var] = landmarkPositionVariance(i);
   const double distance = (p - state_.x.p_s_b).norm();
   return std::isfinite(var) && var <= std::pow(config_.map.max_relative_sigma * distance, 2);
 }

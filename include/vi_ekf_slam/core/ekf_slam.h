@@ -134,9 +134,9 @@ class EkfSlam {
   /// or taken by a short map) at the prior depth (unless `defer`). Fills new_ids, removed_ids and
   /// the counts of r.
   void addLandmarksDelayed(const std::vector<FeatureObservation>& fresh, double t, bool defer, FrameResult* r);
-  /// The world-centric starting state (its covariance the registration's and u's).
   /// A state of the configured layout with the calibrated extrinsic and nothing else.
   FilterState emptyState(Mechanization m) const;
+  /// The world-centric starting state (its covariance the registration's and u's).
   FilterState startingState(const NavState& init, const InitialUncertainty& u,
                             std::optional<double> time_offset_s) const;
   /// Starts from s (world-centric, switched to the configured mechanization).
@@ -208,6 +208,8 @@ class EkfSlam {
   /// Landmark i (map position) is known well enough to be kept and found again: its position's
   /// std-dev (root of the covariance's trace) within map.max_relative_sigma of its distance.
   bool wellMapped(int i) const;
+  /// Landmark i's position (in {s}) and the trace of its covariance [m^2].
+  std::pair<Vec3, double> landmarkPositionVariance(int i) const;
   /// Keeps the descriptor of every observed landmark that has none yet.
   void rememberAppearance(const std::vector<FeatureObservation>& observed);
   /// Landmarks leaving the tracked map: dormant (keep_map and a descriptor) or dropped (into *drop);
