@@ -678,7 +678,7 @@ bool EkfSlam::wellMapped(int i) const {
 
 void EkfSlam::rememberAppearance(const std::vector<FeatureObservation>& observed) {
   for (const auto& f : observed)
-    if (f.descriptor && !descriptors_.count(f.id) && state_.findLandmark(f.id)) descriptors_[f.id] = *f.descriptor;
+    if (f.descriptor && state_.findLandmark(f.id)) descriptors_[f.id] = *f.descriptor;
 }
 
 void EkfSlam::forgetEndedRevisits(const CameraFrame& frame, const std::vector<RevisitMatch>& started) {
@@ -688,6 +688,38 @@ void EkfSlam::forgetEndedRevisits(const CameraFrame& frame, const std::vector<Re
   for (const auto& m : started) live.insert(m.track_id);  // adopted in this image: seen from the next on
   for (auto it = revisiting_.begin(); it != revisiting_.end();)
     it = live.count(it->first) ? std::next(it) : revisiting_.erase(it);
+}
+
+std::vector<MapPoint> EkfSlam::mapPoints() const {
+  std::vector<MapPoint> out;
+  for (const NavLandmark& l : navLandmarks(state_)) {
+    const auto d = descriptors_.find(l.id);
+    const std::optional<int> i = state_.findLandmark(l.id);
+    if (d == descriptors_.end() || !i || !wellMapped(*i)) continue;
+    out.push_back({l.id, l.p_n_l, l.cov, d->second});
+  }
+  return out;
+}
+
+void EkfSlam::moveWorld(const Eigen::Isometry3d& T_new_old) {
+  // In a sensor-centric layout only the pose of {s} in {n} lives in {n}; a world-centric state
+  // goes through that layout and back (its clones' orientations are in the frame being left).
+  const Mechanization m = state_.mechanization();
+  if (!isSensorCentric(m)) {
+    delayed_.clear(&state_);
+    switchMechanization(state_, Mechanization::kSensorCentric);
+  }
+  const Mat3 R = T_new_old.linear();
+  state_.x.p_n_s = R * state_.x.p_n_s + T_new_old.translation();
+  state_.x.q_n_s = (Quat(R) * state_.x.q_n_s).normalized();
+  // The errors of p_n_s and psi_n_s (global, in {n}) turn with the world.
+  Eigen::MatrixXd P = state_.covariance();
+  for (int b : {idx::kPns, idx::kPsiNs}) {
+    P.middleRows(b, 3) = (R * P.middleRows(b, 3)).eval();
+    P.middleCols(b, 3) = (P.middleCols(b, 3) * R.transpose()).eval();
+  }
+  state_.setCovariance(std::move(P));
+  if (!isSensorCentric(m)) switchMechanization(state_, m);
 }
 
 void EkfSlam::forgetMap() {

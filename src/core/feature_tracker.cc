@@ -208,6 +208,15 @@ CameraFrame FeatureTracker::track(double timestamp, const cv::Mat& img,
   // The corner search costs the same whether one track or ten are missing (every cell below
   // its quota is searched), so it can wait until redetect_fraction (<= 1) of the tracks are left.
   if (static_cast<double>(tracks_.size()) < params_.redetect_fraction * params_.max_tracks) detect(img);
+  if (params_.descriptors && ++images_since_described_ >= kDescribeEveryFrames) {
+    // The tracks' appearance in this view (one the ORB cannot describe, near the border, keeps its last).
+    images_since_described_ = 0;
+    std::vector<cv::Point2f> pts;
+    for (const auto& t : tracks_) pts.push_back(t.uv);
+    const auto desc = describe(img, pts);
+    for (size_t i = 0; i < pts.size(); ++i)
+      if (desc[i]) tracks_[i].descriptor = desc[i];
+  }
   prev_pyramid_ = std::move(pyramid);
   prev_image_ = img;
   CameraFrame f;

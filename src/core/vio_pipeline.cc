@@ -2,6 +2,7 @@
 
 #include <chrono>
 #include <cmath>
+#include <limits>
 #include <sstream>
 #include <stdexcept>
 
@@ -19,7 +20,11 @@ bool allFinite(const NavState& n) {
 }  // namespace
 
 VioPipeline::VioPipeline(const EkfSlamConfig& config, const PipelineParams& params, PipelineListener& listener)
-    : config_(config), params_(params), listener_(listener), static_init_(params.static_init) {}
+    : config_(config),
+      params_(params),
+      listener_(listener),
+      static_init_(params.static_init),
+      map_(config.map.max_archived_points) {}
 
 VioPipeline::VioPipeline(const EkfSlamConfig& config, const PipelineParams& params, const CameraModel& camera,
                          const CameraExtrinsics& T_b_c, PipelineListener& listener)
@@ -34,6 +39,7 @@ void VioPipeline::setCamera(const CameraModel& camera, const CameraExtrinsics& T
 }
 
 void VioPipeline::clearCamera() {
+  archiveRun();
   attempt_.reset();
   filter_.reset();
   dynamic_init_.reset();
@@ -46,7 +52,57 @@ void VioPipeline::clearCamera() {
 bool VioPipeline::setConfig(const EkfSlamConfig& config, std::string* error) {
   if (filter_ && !filter_->setConfig(config, error)) return false;
   config_ = config;
+  map_.setMaxPoints(config.map.max_archived_points);
   return true;
+}
+
+void VioPipeline::startedMapRun() { in_map_ = map_.empty(); }
+
+void VioPipeline::archiveRun() {
+  if (keepsMapAcrossRuns() && filter_ && filter_->initialized() && in_map_) map_.merge(filter_->mapPoints());
+  in_map_ = false;
+}
+
+bool VioPipeline::loadMap(const std::string& path, std::string* error) {
+  if (!map_.load(path, error)) return false;
+  in_map_ = false;
+  return true;
+}
+
+bool VioPipeline::saveMap(const std::string& path, std::string* error, int* points) const {
+  MapArchive all = map_;
+  all.setMaxPoints(std::numeric_limits<int>::max());
+  if (filter_ && filter_->initialized() && in_map_) all.merge(filter_->mapPoints());
+  if (points) *points = all.size();
+  return all.save(path, error);
+}
+
+void VioPipeline::tryRelocalize(const CameraFrame& frame) {
+  const NavState nav = filter_->navState();
+  Eigen::Isometry3d T_n_b = Eigen::Isometry3d::Identity();
+  T_n_b.linear() = nav.q_n_b.toRotationMatrix();
+  T_n_b.translation() = nav.p_n_b;
+  // The tracks, and the corners the front end finds over the whole image (a new tracker follows
+  // few of the points the map has; its detector finds more of them).
+  std::vector<FeatureObservation> features = frame.features;
+  if (frame.search) {
+    std::vector<FeatureObservation> corners = frame.search(wholeImageRegions(filter_->camera()));
+    features.insert(features.end(), corners.begin(), corners.end());
+  }
+  const std::optional<Relocalization> r =
+      relocalize(map_, features, filter_->camera(), filter_->extrinsics(), T_n_b, config_.map);
+  if (!r) return;
+  filter_->moveWorld(r->T_m_n);
+  in_map_ = true;
+  ++relocalizations_;
+  std::ostringstream e;
+  e.precision(3);
+  const Eigen::Vector3d& t = r->T_m_n.translation();
+  e << "relocalized in the kept map: " << r->inliers << " of " << r->matches << " matches to " << map_.size()
+    << " map points agree (" << r->reprojection_rms_px << " px rms, tilt " << r->tilt_deg << " deg); the world moved by "
+    << t.norm() << " m and "
+    << std::atan2(r->T_m_n.linear()(1, 0), r->T_m_n.linear()(0, 0)) * 180.0 / M_PI << " deg of yaw";
+  listener_.relocalized(*r, e.str(), *filter_);
 }
 
 void VioPipeline::forgetStart() {
@@ -58,6 +114,7 @@ void VioPipeline::forgetStart() {
 }
 
 void VioPipeline::reset() {
+  archiveRun();
   if (filter_) filter_->reset();
   forgetStart();
   queue_.clear();
@@ -69,6 +126,7 @@ void VioPipeline::initialize(const NavState& state) {
   filter_->initialize(state);
   forgetStart();
   prev_q_n_b_.reset();
+  startedMapRun();
 }
 
 void VioPipeline::addImu(const ImuData& imu) {
@@ -103,6 +161,7 @@ void VioPipeline::tryStatic(double t_now) {
   forgetStart();
   // The tracks start with the filter: no rotation seed for the first frame.
   prev_q_n_b_.reset();
+  startedMapRun();
   listener_.started(StartKind::kAtRest, e.str(), *filter_);
 }
 
@@ -184,6 +243,7 @@ bool VioPipeline::startMoving(const std::optional<DynamicInitResult>& r, const s
     << filter_->config().camera_time_offset_s + r->time_offset_correction_s << " s)";
   forgetStart();
   prev_q_n_b_ = filter_->navState().q_n_b;
+  startedMapRun();
   listener_.started(StartKind::kMoving, e.str(), *filter_);
   return true;
 }
@@ -222,6 +282,7 @@ void VioPipeline::process(QueuedFrame& f) {
   features.timestamp = f.t;
   FrameResult r = filter_->processFrame(features);
   std::optional<NavState> nav;
+  if (r.processed && r.lost.empty() && keepsMapAcrossRuns() && !in_map_ && !map_.empty()) tryRelocalize(features);
   if (r.processed && r.lost.empty()) {
     nav = filter_->navState();
     if (!allFinite(*nav)) r.lost = "the filter state became non-finite";
@@ -229,7 +290,8 @@ void VioPipeline::process(QueuedFrame& f) {
   listener_.processed(features, r, *filter_);
   if (!r.processed) return;
   if (!r.lost.empty()) {
-    // Nothing of a lost filter is used: start over, at rest or moving.
+    // Nothing of a lost filter is used, its map neither: start over, at rest or moving.
+    in_map_ = false;
     reset();
     listener_.lost(r.lost);
     return;

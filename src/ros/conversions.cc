@@ -199,6 +199,9 @@ vi_ekf_slam::FilterStatus toFilterStatus(const EkfSlam& filter, const NavState& 
   s.waiting_features = r.waiting_features;
   s.removed_landmarks = static_cast<int>(r.removed_ids.size());
   s.dormant_landmarks = r.dormant_landmarks;
+  s.in_map = x.in_map;
+  s.map_points = x.map_points;
+  s.relocalizations = x.relocalizations;
   s.revisits = static_cast<int>(r.revisits.size());
   s.refused_revisits = r.revisits_rejected;
   s.accepted_observations = r.update.accepted;

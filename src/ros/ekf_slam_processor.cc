@@ -1,6 +1,7 @@
 #include "vi_ekf_slam/ros/ekf_slam_processor.h"
 
 #include <chrono>
+#include <fstream>
 #include <ros/console.h>
 #include <sstream>
 #include <stdexcept>
@@ -22,6 +23,34 @@ EkfSlamProcessor::EkfSlamProcessor(const NodeParams& params, OutputSink& sink, c
       frames_(params.node.publish_tf, params.node.world_frame, params.node.odom_frame, params.node.base_frame) {
   if (params_.node.tune_allocator) tuneAllocatorForLargeBuffers();
   body_frame_ = params_.node.body_frame;  // "": from the first IMU message
+  // A map walked before: the first run is placed in it once it sees it. No file yet is the first
+  // walk of the building (~save_map writes it); a file that is not a map is a configuration error.
+  if (!params_.node.map_file.empty() && std::ifstream(params_.node.map_file).good()) {
+    std::string error;
+    if (!pipeline_->loadMap(params_.node.map_file, &error)) throw std::invalid_argument("map_file: " + error);
+    ROS_INFO_STREAM("vi_ekf_slam: map_file " << params_.node.map_file << ": " << pipeline_->map().size()
+                                             << " points; the filter is placed in it when it sees them");
+  }
+}
+
+bool EkfSlamProcessor::saveMap(std::string* message) const {
+  const std::string& path = params_.node.map_file;
+  if (path.empty()) {
+    *message = "no map_file parameter: nowhere to save the map";
+    return false;
+  }
+  if (!params_.filter.map.enabled) {
+    *message = "keep_map is off: no landmark has an appearance to be found again by";
+    return false;
+  }
+  std::string error;
+  int points = 0;
+  if (!pipeline_->saveMap(path, &error, &points)) {
+    *message = error;
+    return false;
+  }
+  *message = "map saved to " + path + ": " + std::to_string(points) + " points";
+  return true;
 }
 
 std::pair<int, std::string> EkfSlamProcessor::inputsHealth() const {
@@ -243,6 +272,8 @@ void EkfSlamProcessor::started(StartKind kind, const std::string& event, EkfSlam
   } else if (current_) {
     last_processed_t_ = current_->t;
   }
+  // A run that defines the kept map (it was empty): the map's frame is this world's place in odom.
+  if (pipeline_->inMap()) frames_.worldIsMap();
   sink_.event(event);
 }
 
@@ -272,6 +303,12 @@ void EkfSlamProcessor::imuBridged(const ImuData& imu, ImuSampleVerdict why) {
     w << "IMU sample at " << std::fixed << imu.timestamp << " s implausible next to the last: bridged";
   }
   reportProblem(w.str());
+}
+
+void EkfSlamProcessor::relocalized(const Relocalization& r, const std::string& event, EkfSlam& /*filter*/) {
+  ROS_INFO_STREAM("vi_ekf_slam: " << event);
+  frames_.relocalized(r.T_m_n, !params_.node.map_frame.empty());
+  sink_.event(event);
 }
 
 void EkfSlamProcessor::lost(const std::string& why) {
@@ -357,6 +394,9 @@ void EkfSlamProcessor::output(const PendingImage& img, const CameraFrame& frame,
   x.update_ms = last_update_ms_;
   x.tracker_ms = last_tracker_ms_;
   x.gravity_mps2 = params_.filter.gravity_mps2;
+  x.in_map = pipeline_->inMap();
+  x.map_points = pipeline_->map().size();
+  x.relocalizations = pipeline_->relocalizations();
   vi_ekf_slam::FilterStatus s = toFilterStatus(filter, nav, r, x);
   s.header.stamp = stamp;
   s.header.frame_id = frames_.fixedFrame();

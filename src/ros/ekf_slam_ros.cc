@@ -3,10 +3,16 @@
 #include <cv_bridge/cv_bridge.h>
 #include <std_msgs/String.h>
 #include <stdexcept>
+#include <tf2_eigen/tf2_eigen.h>
 
 #include "vi_ekf_slam/ros/conversions.h"
 
 namespace vi_ekf_slam::glue {
+
+namespace {
+/// The map outlives resets and can be relocalized in (keep_map with map_relocalize), as started.
+bool keepsMap(const NodeParams& p) { return p.filter.map.enabled && p.filter.map.relocalize; }
+}  // namespace
 
 EkfSlamRos::EkfSlamRos(ros::NodeHandle nh, ros::NodeHandle pnh) : nh_(nh), pnh_(pnh), it_(nh), updater_(nh, pnh) {
   NodeParams params;
@@ -16,8 +22,9 @@ EkfSlamRos::EkfSlamRos(ros::NodeHandle nh, ros::NodeHandle pnh) : nh_(nh), pnh_(
   // TF is read for the camera-IMU extrinsic, for base_frame <- IMU, and to find whether the frame
   // the node moves already has a parent.
   tf_listener_ = std::make_unique<tf2_ros::TransformListener>(tf_buffer_, nh_);
-  if (params.node.publish_tf == TfMode::kOdom && !params.node.map_frame.empty()) {
-    // No global localizer: map and odom coincide (REP-105).
+  if (params.node.publish_tf == TfMode::kOdom && !params.node.map_frame.empty() && !keepsMap(params)) {
+    // No global localizer: map and odom coincide (REP-105). With the kept map, map -> odom goes
+    // with the odometry (a relocalization moves it).
     geometry_msgs::TransformStamped t;
     t.header.stamp = ros::Time::now();
     t.header.frame_id = params.node.map_frame;
@@ -60,6 +67,18 @@ EkfSlamRos::EkfSlamRos(ros::NodeHandle nh, ros::NodeHandle pnh) : nh_(nh), pnh_(
         res.message = processor_->params().dynamic_init_enabled
                           ? "filter reset; re-initializing at the next static interval or moving start"
                           : "filter reset; re-initializing at the next static interval";
+        return true;
+      });
+
+  save_map_srv_ = pnh_.advertiseService<std_srvs::Trigger::Request, std_srvs::Trigger::Response>(
+      "save_map", [this](std_srvs::Trigger::Request&, std_srvs::Trigger::Response& res) {
+        std::lock_guard<std::mutex> lock(mutex_);
+        res.success = processor_->saveMap(&res.message);
+        if (res.success) {
+          ROS_INFO_STREAM("vi_ekf_slam: " << res.message);
+        } else {
+          ROS_WARN_STREAM("vi_ekf_slam: save_map: " << res.message);
+        }
         return true;
       });
 
@@ -131,6 +150,15 @@ void EkfSlamRos::odometry(const nav_msgs::Odometry& odom) {
     t.transform.rotation = odom.pose.pose.orientation;
     tf_broadcaster_.sendTransform(t);
     tf_sent_ = true;
+    if (o.publish_tf == TfMode::kOdom && !o.map_frame.empty() && keepsMap(processor_->params())) {
+      // map_frame -> odom_frame: where the kept map places odom (identity until a relocalization).
+      const Eigen::Isometry3d T_m_o = processor_->outputFrames().odomFromMap().inverse();
+      geometry_msgs::TransformStamped m = tf2::eigenToTransform(T_m_o);
+      m.header.stamp = odom.header.stamp;
+      m.header.frame_id = o.map_frame;
+      m.child_frame_id = o.odom_frame;
+      tf_broadcaster_.sendTransform(m);
+    }
   }
   geometry_msgs::PoseStamped ps;
   ps.header = odom.header;
@@ -250,6 +278,12 @@ void EkfSlamRos::diagnoseFilter(diagnostic_updater::DiagnosticStatusWrapper& sta
   stat.add("lost (divergence resets)", processor_->counters().divergences);
   stat.add("last lost", processor_->lastLost());
   stat.add("last update [ms]", processor_->lastUpdateMs());
+  if (keepsMap(processor_->params())) {
+    const VioPipeline& p = processor_->pipeline();
+    stat.add("kept map points", p.map().size());
+    stat.add("in the kept map", p.inMap() ? "yes" : "no: not relocalized since the last reset");
+    stat.add("relocalizations", p.relocalizations());
+  }
 }
 
 }  // namespace vi_ekf_slam::glue

@@ -136,9 +136,21 @@ nav_msgs::Odometry OutputFrames::odometry(const nav_msgs::Odometry& imu_in_world
   if (!T_o_w_) {
     T_o_w_ = last_T_o_b_ ? gravityAlignedOffset(*last_T_o_b_, poseOf(base)) : Eigen::Isometry3d::Identity();
   }
+  if (world_is_map_) T_o_m_ = *T_o_w_;
   nav_msgs::Odometry o = reexpressed(base, *T_o_w_, odom_frame_);
   last_T_o_b_ = poseOf(o);
   return o;
+}
+
+void OutputFrames::relocalized(const Eigen::Isometry3d& T_m_n, bool keep_odom) {
+  if (mode_ == TfMode::kWorld) return;
+  if (keep_odom) {
+    // Unset (no pose since the restart): the next pose continues the last one, as after any restart.
+    if (T_o_w_) T_o_w_ = *T_o_w_ * T_m_n.inverse();
+  } else {
+    T_o_w_ = T_o_m_;
+  }
+  world_is_map_ = true;  // from the next pose on, the map's frame in odom is the world's
 }
 
 }  // namespace vi_ekf_slam::glue

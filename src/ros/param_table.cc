@@ -100,7 +100,8 @@ std::vector<ParamSpec> makeTable() {
       field("base_frame", "frames", VI_FIELD(p.node.base_frame), "",
             "the robot's base (base_link); \"\": the IMU frame. base_frame <- IMU frame is looked up on TF (URDF)"),
       field("map_frame", "frames", VI_FIELD(p.node.map_frame), "",
-            "if set (publish_tf odom): broadcast map_frame -> odom_frame as identity (no global localizer)"),
+            "if set (publish_tf odom): broadcast map_frame -> odom_frame; identity, or with keep_map the kept map's "
+            "placement of odom (odom stays continuous, map -> odom takes a relocalization's correction)"),
       field("world_frame", "frames", VI_FIELD(p.node.world_frame), "",
             "publish_tf world: the filter's own world, z up (REP-103), restarting at every reset"),
       field("body_frame", "frames", VI_FIELD(p.node.body_frame), "",
@@ -240,6 +241,23 @@ std::vector<ParamSpec> makeTable() {
             "chi^2 gate (2 dof) of the region a dormant landmark is searched in", dyn),
       field("map_max_search_sigma_px", "map", VI_FIELD(p.filter.map.max_search_sigma_px), "px",
             "a dormant landmark is searched for only while its predicted pixel's std-dev is below this", dyn),
+      field("map_relocalize", "map", VI_FIELD(p.filter.map.relocalize), "",
+            "keep_map: the map outlives resets (and map_file loads one); a new run is placed back in it when the "
+            "camera sees mapped points again (appearance matches + PnP RANSAC)",
+            dyn),
+      field("map_max_archived_points", "map", VI_FIELD(p.filter.map.max_archived_points), "count",
+            "points kept across resets and saved; beyond it the first archived leave first", dyn),
+      field("map_relocalize_min_inliers", "map", VI_FIELD(p.filter.map.relocalize_min_inliers), "count",
+            "matches to the kept map that must agree on the camera's pose for a relocalization", dyn),
+      field("map_relocalize_reprojection_px", "map", VI_FIELD(p.filter.map.relocalize_reprojection_px), "px",
+            "a match agrees with the relocalized pose when it reprojects within this", dyn),
+      field("map_relocalize_max_tilt_deg", "map", VI_FIELD(p.filter.map.relocalize_max_tilt_deg), "deg",
+            "largest angle between the relocalized camera's gravity and the filter's (a larger one is a false "
+            "match)",
+            dyn),
+      field("map_file", "map", VI_FIELD(p.node.map_file), "",
+            "keep_map: a map (YAML or JSON, from ~save_map) loaded at start when the file exists, so a building "
+            "walked before is started in localized; ~save_map writes it"),
       // --- standing
       field("zero_velocity", "standing", VI_FIELD(p.filter.zero_velocity.enabled), "",
             "detect standing from the images and apply v = 0", dyn),

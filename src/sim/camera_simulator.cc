@@ -38,24 +38,40 @@ Descriptor landmarkPattern(std::int64_t landmark, const DescriptorSimParams& par
   return d;
 }
 
-std::optional<Descriptor> TrackingCamera::describe(std::int64_t landmark, std::uint64_t salt, const Vec3& p_n_c) {
+std::optional<Descriptor> TrackingCamera::describe(std::int64_t landmark, std::uint64_t salt,
+                                                   const Vec3& p_n_c) const {
   const DescriptorSimParams& p = params_.descriptors;
   if (!p.enabled) return std::nullopt;
   const Vec3 ray = p_n_c - world_.at(static_cast<size_t>(landmark)).p_n;
   const double distance = std::max(1e-6, ray.norm());
-  const auto first = first_view_.emplace(landmark, std::make_pair(ray / distance, distance)).first->second;
-  const double angle = std::acos(std::clamp(first.first.dot(ray / distance), -1.0, 1.0));
-  const double mean_bits =
-      p.same_view_bits + p.bits_per_rad * angle + p.bits_per_log_scale * std::abs(std::log(distance / first.second));
-  const double q = std::clamp(mean_bits / 256.0, 0.0, 0.5);  // 0.5: no resemblance left
-  // The track's own randomness (not the frame's generator): descriptors change nothing else.
+  // The appearance is a function of the view (not of the order of the views): each bit of the
+  // pattern flips with a stripe function of the viewing direction and log-distance, period 2 along
+  // a random direction. Two views differ in a bit with probability |n . (phi_1 - phi_2)|
+  // (E = sqrt(2/pi) |dphi|) while that is small, and in about half of their bits when far apart
+  // (no resemblance left); the scales give bits_per_rad and bits_per_log_scale on average. The
+  // stripes belong to the pattern, so look-alikes (texture_patterns) change alike.
+  constexpr double kMeanAbsNormal = 0.7978845608;  // E|n . u| for n ~ N(0, I), |u| = 1
+  Eigen::Vector4d phi;
+  phi.head<3>() = ray / distance * (p.bits_per_rad / (256.0 * kMeanAbsNormal));
+  phi(3) = std::log(distance) * (p.bits_per_log_scale / (256.0 * kMeanAbsNormal));
+  const std::int64_t pattern = p.texture_patterns > 0 ? landmark % p.texture_patterns : landmark;
+  std::minstd_rand view(static_cast<std::uint32_t>(static_cast<std::uint64_t>(pattern) * 40503ULL + 12345ULL) | 1u);
+  std::normal_distribution<double> normal(0.0, 1.0);
+  std::uniform_real_distribution<double> phase(0.0, 2.0);
+  // Each detection adds its own noise: two from the same view differ in same_view_bits on average.
+  // (The track's own randomness, not the frame's generator: descriptors change nothing else.)
   std::minstd_rand g(static_cast<std::uint32_t>(static_cast<std::uint64_t>(landmark) * 2654435761ULL + salt * 97ULL) |
                      1u);
-  std::bernoulli_distribution flip(q);
+  std::bernoulli_distribution noise(std::clamp(p.same_view_bits / 512.0, 0.0, 0.5));
   Descriptor d = landmarkPattern(landmark, p);
-  for (auto& byte : d)
-    for (int bit = 0; bit < 8; ++bit)
-      if (flip(g)) byte ^= static_cast<std::uint8_t>(1u << bit);
+  for (auto& byte : d) {
+    for (int bit = 0; bit < 8; ++bit) {
+      Eigen::Vector4d n;
+      for (int k = 0; k < 4; ++k) n(k) = normal(view);
+      const bool stripe = static_cast<long>(std::floor(n.dot(phi) + phase(view))) % 2 != 0;
+      if (stripe != noise(g)) byte ^= static_cast<std::uint8_t>(1u << bit);
+    }
+  }
   return d;
 }
 
@@ -119,6 +135,11 @@ CameraFrame TrackingCamera::observe(const TrajectorySample& s, std::mt19937_64* 
     kept.push_back(
         {landmark, trackId(landmark, k, world_.size()), describe(landmark, static_cast<std::uint64_t>(k), p_n_c)});
     ++occupancy[static_cast<size_t>(cellOf(uv_of[landmark]))];
+  }
+  // A tracker describes its tracks again every kDescribeEveryFrames images (the appearance the
+  // map keeps is the latest view's, which is what a return to the same place sees).
+  if (frames_ % kDescribeEveryFrames == 0) {
+    for (auto& track : kept) track.descriptor = describe(track.landmark, (frames_ << 20) + 3, p_n_c);
   }
   tracked_ = kept;
   CameraFrame f;

@@ -61,13 +61,15 @@ std::string toString(SensorFault::Kind kind) {
       return "camera_covered";
     case SensorFault::Kind::kImuClipped:
       return "imu_clipped";
+    case SensorFault::Kind::kReset:
+      return "reset";
   }
   return "unknown";
 }
 
 std::optional<SensorFault::Kind> sensorFaultKindFromString(const std::string& s) {
   for (auto k : {SensorFault::Kind::kImageDropout, SensorFault::Kind::kImuGap, SensorFault::Kind::kOutlierBurst,
-                 SensorFault::Kind::kCameraCovered, SensorFault::Kind::kImuClipped}) {
+                 SensorFault::Kind::kCameraCovered, SensorFault::Kind::kImuClipped, SensorFault::Kind::kReset}) {
     if (toString(k) == s) return k;
   }
   return std::nullopt;
@@ -124,6 +126,11 @@ class RunRecorder : public PipelineListener {
     run_->initialized_t = filter.state().timestamp;
   }
   void lost(const std::string& /*why*/) override { lost_before = true; }
+  void relocalized(const Relocalization& r, const std::string& /*event*/, EkfSlam& /*filter*/) override {
+    relocalization_ = r;
+  }
+  /// The pipeline, for whether the filter is in the kept map.
+  const VioPipeline* pipeline = nullptr;
   void processed(const CameraFrame& frame, const FrameResult& r, EkfSlam& filter) override {
     FrameRecord rec;
     rec.result = r;
@@ -138,6 +145,24 @@ class RunRecorder : public PipelineListener {
     if (r.processed && r.lost.empty()) last_estimate = rec.estimate;
     rec.landmarks_in_state = filter.state().numLandmarks();
     rec.initialized_t = run_->initialized_t;
+    if (relocalization_) {
+      rec.relocalized = true;
+      rec.relocalization_inliers = relocalization_->inliers;
+      // A pair is false when the map point's true landmark is not where the feature is (a searched
+      // corner has no track id: its pixel is what the truth can check).
+      MotionState truth;
+      truth.p_s_b = rec.truth.p_n_b;
+      truth.q_s_b = rec.truth.q_n_b;
+      for (const auto& pair : relocalization_->pairs) {
+        const Vec3 p_c = landmarkInCamera(truth, landmarkOfTrack(pair.point_id, sc_.world).p_n, sc_.T_b_c);
+        Eigen::Vector2d uv;
+        const bool there = p_c.z() > 0.0 && sc_.camera.project(p_c, &uv) &&
+                           (uv - pair.uv).norm() <= 5.0 * std::max(1.0, sc_.cam.pixel_noise_px);
+        if (!there) ++rec.relocalization_false_pairs;
+      }
+      relocalization_.reset();
+    }
+    rec.in_map = pipeline && pipeline->inMap();
     if (callback_) callback_(filter, rec);
     if (keep_frames_) run_->frames.push_back(std::move(rec));
   }
@@ -148,6 +173,7 @@ class RunRecorder : public PipelineListener {
   const FrameCallback& callback_;
   bool keep_frames_;
   SimRun* run_;
+  std::optional<Relocalization> relocalization_;  ///< told before the frame's processed()
 };
 
 }  // namespace
@@ -182,6 +208,13 @@ bool SensorStream::next(Event* e) {
         // after are new tracks, as a KLT tracker's are).
         if (activeFault(sc_.faults, SensorFault::Kind::kImageDropout, t)) continue;
         CameraFrame frame;
+        // A reset ends every track (the node's tracker starts over with the filter).
+        for (const auto& f : sc_.faults) {
+          if (f.kind == SensorFault::Kind::kReset && f.start_s > t - cam_dt_ && f.start_s <= t) {
+            camera_.loseTracks();
+            e->reset_before = true;
+          }
+        }
         if (activeFault(sc_.faults, SensorFault::Kind::kCameraCovered, t)) {
           camera_.loseTracks();
         } else {
@@ -226,6 +259,7 @@ SimRun runSimulation(const Scenario& sc, const EkfSlamConfig& config, const NavS
   SimRun run;
   RunRecorder recorder(sc, imu, callback, keep_frames, &run);
   VioPipeline pipeline(config, simulatedNodeStart(sc, config), sc.camera, sc.given_T_b_c.value_or(sc.T_b_c), recorder);
+  recorder.pipeline = &pipeline;
   // A start from the initializers knows neither position nor yaw: it is registered to the truth's
   // with an error drawn from the filter's prior, as a prior start is. A start over after the filter
   // was lost continues from its last estimate, as the node's odometry does.
@@ -246,6 +280,10 @@ SimRun runSimulation(const Scenario& sc, const EkfSlamConfig& config, const NavS
     if (e.imu) {
       pipeline.addImu(*e.imu);
     } else {
+      if (e.reset_before) {
+        pipeline.reset();
+        recorder.lost_before = true;  // the start over continues from the last estimate, as odom does
+      }
       // The camera observed the frame now; the pipeline uses it once the IMU reaches it.
       auto observed = std::make_shared<CameraFrame>(std::move(*e.frame));
       pipeline.addFrame({observed->timestamp, [observed](const std::optional<Mat3>&) { return *observed; }});

@@ -13,6 +13,7 @@
 
 #include "vi_ekf_slam/core/camera_model.h"
 #include "vi_ekf_slam/core/dynamic_initializer.h"
+#include "vi_ekf_slam/core/map_archive.h"
 #include "vi_ekf_slam/core/map_memory.h"
 #include "vi_ekf_slam/core/ekf_slam_config.h"
 #include "vi_ekf_slam/core/navigation_output.h"
@@ -104,6 +105,14 @@ class EkfSlam {
   std::optional<NavState> predictedNavState(Vec3* angular_rate = nullptr) const;
   std::vector<NavLandmark> landmarks() const { return navLandmarks(state_); }
   const FilterState& state() const { return state_; }
+
+  /// The landmarks worth keeping across a reset (map_archive.h): the well-mapped ones with an
+  /// appearance, in {n} with their covariance.
+  std::vector<MapPoint> mapPoints() const;
+  /// Moves the filter's world: every {n} quantity x becomes T_new_old x (a rotation about z and a
+  /// translation, so gravity stays along z), the covariance with it. A relocalization places the
+  /// running filter in the kept map this way.
+  void moveWorld(const Eigen::Isometry3d& T_new_old);
 
   int compositions() const { return compositions_; }
   /// The probability of the next update's chi^2 gate (OutlierWatch).
@@ -210,7 +219,7 @@ class EkfSlam {
   bool wellMapped(int i) const;
   /// Landmark i's position (in {s}) and the trace of its covariance [m^2].
   std::pair<Vec3, double> landmarkPositionVariance(int i) const;
-  /// Keeps the descriptor of every observed landmark that has none yet.
+  /// Keeps the latest descriptor of every observed landmark (its latest view's appearance).
   void rememberAppearance(const std::vector<FeatureObservation>& observed);
   /// Landmarks leaving the tracked map: dormant (keep_map and a descriptor) or dropped (into *drop);
   /// then dormant ones are dropped (retire's rule) until `wanted` new ones fit in max_landmarks and

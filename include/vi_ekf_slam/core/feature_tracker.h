@@ -89,7 +89,7 @@ class FeatureTracker {
     cv::Point2f uv;
     int age;
     std::vector<cv::Point2f> history;
-    std::optional<Descriptor> descriptor;  ///< where it was detected
+    std::optional<Descriptor> descriptor;  ///< its latest description (kDescribeEveryFrames)
   };
   void detect(const cv::Mat& img);
   /// ORB descriptors at the points (none for a point too near the border to describe).
@@ -100,6 +100,7 @@ class FeatureTracker {
   /// CameraFrame::adopt: a corner of the last search becomes a track.
   std::int64_t adoptCorner(const FeatureObservation& corner);
   cv::Ptr<cv::Feature2D> orb_ = cv::ORB::create();
+  int images_since_described_ = 0;  ///< the tracks are described again every kDescribeEveryFrames
   cv::Point2f predict(const cv::Point2f& uv, const Eigen::Matrix3d& R_cur_prev) const;
 
   CameraModel camera_;

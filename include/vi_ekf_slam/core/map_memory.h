@@ -43,6 +43,18 @@ struct MapMemoryParams {
   /// A dormant landmark is searched for only while its predicted pixel's std-dev (the larger axis
   /// of its innovation covariance) is below this [px]: a region wider than that holds look-alikes.
   double max_search_sigma_px = 40.0;
+  /// After a reset (or a map loaded from a file), place the new run in the kept map when the
+  /// camera sees mapped points again (map_archive.h).
+  bool relocalize = true;
+  /// Points kept across runs (and saved) [count]; the first archived leave first.
+  int max_archived_points = 2000;
+  /// Matches that must agree on the camera's pose for a relocalization [count].
+  int relocalize_min_inliers = 12;
+  /// A match agrees when it reprojects within this under the pose [px].
+  double relocalize_reprojection_px = 3.0;
+  /// The PnP camera's gravity may differ from the filter's by at most this [deg]: both worlds are
+  /// gravity-aligned, a larger tilt is a false relocalization.
+  double relocalize_max_tilt_deg = 5.0;
 };
 
 int hammingDistance(const Descriptor& a, const Descriptor& b);

@@ -29,10 +29,15 @@ using Descriptor = std::array<std::uint8_t, 32>;
 struct FeatureObservation {
   std::int64_t id = 0;
   Eigen::Vector2d uv = Eigen::Vector2d::Zero();  ///< [px]
-  /// The track's appearance where it was detected (the same on every image of the track), if the
-  /// front end gives one: what finds the point again once the track has ended (map_memory.h).
+  /// The track's appearance, if the front end gives one: described where it was detected and again
+  /// every kDescribeEveryFrames images; what finds the point again once the track has ended
+  /// (map_memory.h, map_archive.h).
   std::optional<Descriptor> descriptor = std::nullopt;
 };
+
+/// How often a front end describes its tracks again [images]: the appearance kept with a landmark
+/// is then its latest view's (a return to the same place sees that one, not the first view's).
+constexpr int kDescribeEveryFrames = 10;
 
 /// Where the filter expects a landmark whose track ended: its predicted pixel and the innovation
 /// covariance of that prediction [px^2] (map_memory.h).

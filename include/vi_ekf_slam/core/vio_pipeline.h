@@ -15,6 +15,7 @@
 #include "vi_ekf_slam/core/dynamic_initializer.h"
 #include "vi_ekf_slam/core/ekf_slam.h"
 #include "vi_ekf_slam/core/imu_sample_check.h"
+#include "vi_ekf_slam/core/map_archive.h"
 #include "vi_ekf_slam/core/static_initializer.h"
 
 namespace vi_ekf_slam {
@@ -67,6 +68,9 @@ class PipelineListener {
   virtual void lost(const std::string& /*why*/) {}
   /// An IMU sample was not integrated as it is (clipped at the range or implausible): bridged.
   virtual void imuBridged(const ImuData& /*imu*/, ImuSampleVerdict /*why*/) {}
+  /// The filter was placed in the kept map (its world moved by r.T_m_n) before this frame's
+  /// processed(); `event` says so with the figures.
+  virtual void relocalized(const Relocalization& /*r*/, const std::string& /*event*/, EkfSlam& /*filter*/) {}
 };
 
 class VioPipeline {
@@ -112,6 +116,20 @@ class VioPipeline {
   void setRegistration(std::function<NavState(const NavState&)> registration) {
     registration_ = std::move(registration);
   }
+  /// The map kept across resets (keep_map with map_relocalize): what earlier runs and a loaded
+  /// file mapped, in the map's frame. A new filter is placed in it by relocalization; the first
+  /// one of an empty map defines it.
+  const MapArchive& map() const { return map_; }
+  /// Whether the running filter's world is the map's frame (false: not relocalized yet).
+  bool inMap() const { return in_map_; }
+  int relocalizations() const { return relocalizations_; }
+  /// Replaces the kept map by a file's (MapArchive::load); the running filter is then placed in it
+  /// by relocalization. False and *error if the file cannot be used.
+  bool loadMap(const std::string& path, std::string* error);
+  /// Writes the kept map with the running filter's points (when it is in the map) to a file, and
+  /// how many points that is to *points.
+  bool saveMap(const std::string& path, std::string* error, int* points = nullptr) const;
+
   /// The filter (hasCamera() must be true).
   EkfSlam& filter() { return *filter_; }
   const EkfSlam& filter() const { return *filter_; }
@@ -128,6 +146,13 @@ class VioPipeline {
   /// The state the filter starts from: the registration's, or `s` itself.
   NavState registered(const NavState& s) const { return registration_ ? registration_(s) : s; }
   void forgetStart();
+  /// A filter started: it defines the map if the map is empty, else waits to be placed in it.
+  void startedMapRun();
+  bool keepsMapAcrossRuns() const { return config_.map.enabled && config_.map.relocalize; }
+  /// Before the filter forgets its run: its points join the map (when its world is the map's).
+  void archiveRun();
+  /// The filter not in the map yet: this frame's features against the map (PnP); placed on success.
+  void tryRelocalize(const CameraFrame& frame);
 
   EkfSlamConfig config_;
   PipelineParams params_;
@@ -147,6 +172,9 @@ class VioPipeline {
     std::future<std::pair<std::optional<DynamicInitResult>, std::string>> outcome;
   };
   std::optional<StartAttempt> attempt_;  ///< background attempts: the one in flight
+  MapArchive map_;
+  bool in_map_ = false;
+  int relocalizations_ = 0;
 };
 
 }  // namespace vi_ekf_slam

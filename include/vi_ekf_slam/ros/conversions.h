@@ -57,6 +57,9 @@ struct StatusExtras {
   long resets = 0;
   double update_ms = 0.0, tracker_ms = 0.0;  ///< time for the image, and the tracker's part of it [ms]
   double gravity_mps2 = 9.81;
+  bool in_map = false;  ///< the kept map (VioPipeline::inMap, map())
+  int map_points = 0;
+  int relocalizations = 0;
 };
 /// The status of one processed image (header left empty for the caller).
 vi_ekf_slam::FilterStatus toFilterStatus(const EkfSlam& filter, const NavState& nav, const FrameResult& r,

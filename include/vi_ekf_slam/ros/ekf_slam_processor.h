@@ -85,6 +85,10 @@ class EkfSlamProcessor : private PipelineListener {
   void cameraInfo(const sensor_msgs::CameraInfo& msg);
   /// Forgets state, map, tracks and queue; re-initializes at the next static interval.
   void reset(const std::string& reason);
+  /// Writes the kept map to map_file (~save_map); *message says how many points, or why not.
+  bool saveMap(std::string* message) const;
+  /// The core pipeline (its kept map, whether the filter is in it).
+  const VioPipeline& pipeline() const { return *pipeline_; }
   /// Applies a dynamic_reconfigure update; returns the problems or an empty string.
   std::string reconfigure(const EkfSlamReconfigureConfig& config);
 
@@ -142,6 +146,7 @@ class EkfSlamProcessor : private PipelineListener {
   void processed(const CameraFrame& frame, const FrameResult& r, EkfSlam& filter) override;
   void lost(const std::string& why) override;
   void imuBridged(const ImuData& imu, ImuSampleVerdict why) override;
+  void relocalized(const Relocalization& r, const std::string& event, EkfSlam& filter) override;
 
   NodeParams params_;
   OutputSink& sink_;

@@ -71,6 +71,7 @@ class EkfSlamRos : public OutputSink {
   ros::Subscriber imu_sub_, info_sub_;
   ros::Publisher odom_pub_, odom_imu_pub_, path_pub_, landmarks_pub_, status_pub_, events_pub_;
   ros::ServiceServer reset_srv_;
+  ros::ServiceServer save_map_srv_;  ///< ~save_map: the kept map to map_file
   ros::Timer diag_timer_;
   nav_msgs::Path path_;
   diagnostic_updater::Updater updater_;

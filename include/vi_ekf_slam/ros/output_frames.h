@@ -56,12 +56,27 @@ class OutputFrames {
   /// The filter's world in the fixed frame of the outputs (identity before the first odometry).
   Eigen::Isometry3d fixedFromWorld() const { return T_o_w_.value_or(Eigen::Isometry3d::Identity()); }
   /// The filter started over: its next pose continues the last published one.
-  void filterRestarted() { T_o_w_.reset(); }
+  void filterRestarted() {
+    T_o_w_.reset();
+    world_is_map_ = false;
+  }
   /// Time went back (a replayed bag looped): odom starts over with the filter.
   void forget() {
     T_o_w_.reset();
     last_T_o_b_.reset();
+    T_o_m_ = Eigen::Isometry3d::Identity();
+    world_is_map_ = false;
   }
+  /// The filter's world is the kept map's (a run that starts an empty map): the map's frame is
+  /// placed in odom where this world is.
+  void worldIsMap() { world_is_map_ = true; }
+  /// The filter's world moved into the kept map by T_m_n (VioPipeline relocalized it).
+  /// keep_odom (a map_frame is set): odom stays continuous and map -> odom takes the correction;
+  /// else odom rejoins the map, where it was before the reset (the pose jumps by the correction).
+  void relocalized(const Eigen::Isometry3d& T_m_n, bool keep_odom);
+  /// The kept map's frame in odom: map_frame -> odom_frame is its inverse (identity until a
+  /// relocalization with keep_odom moves odom away from the map).
+  const Eigen::Isometry3d& odomFromMap() const { return T_o_m_; }
 
  private:
   TfMode mode_;
@@ -70,6 +85,8 @@ class OutputFrames {
   std::string imu_frame_;                        ///< the frame T_b_i_ was looked up for
   std::optional<Eigen::Isometry3d> T_o_w_;       ///< the filter's current world in odom
   std::optional<Eigen::Isometry3d> last_T_o_b_;  ///< the last published base pose
+  Eigen::Isometry3d T_o_m_ = Eigen::Isometry3d::Identity();  ///< the kept map's frame in odom
+  bool world_is_map_ = false;  ///< the filter's world is the map's: T_o_m_ follows T_o_w_
 };
 
 }  // namespace vi_ekf_slam::glue

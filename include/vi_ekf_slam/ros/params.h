@@ -27,7 +27,8 @@ struct NodeOptions {
   TfMode publish_tf = TfMode::kOdom;
   std::string odom_frame = "odom";    ///< REP-105 odom: the pose of the base is continuous in it
   std::string base_frame;             ///< the robot's base ("": the IMU frame); base <- IMU from TF
-  std::string map_frame;              ///< if set (odom mode), map -> odom is broadcast as identity
+  std::string map_frame;              ///< if set (odom mode), map -> odom: identity, or the kept map's placement
+  std::string map_file;               ///< keep_map: loaded at start if it exists, written by ~save_map
   std::string world_frame = "world";  ///< publish_tf world: the filter's world, z up
   /// The IMU/body frame; "": the frame_id of the IMU messages ("imu" if they carry none).
   std::string body_frame;

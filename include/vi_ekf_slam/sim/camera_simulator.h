@@ -15,15 +15,16 @@
 namespace vi_ekf_slam::sim {
 
 /// The appearance a simulated tracker gives a new track (an ORB descriptor's 256 bits): its
-/// landmark's pattern with bits flipped, as many more as the view differs from the landmark's
-/// first view, so that a point seen again from another angle or distance does not always match.
-/// Each flip count is binomial around its mean; the randomness is the track's own (the pixel
-/// noise and everything else is unchanged by it).
+/// landmark's pattern with bits flipped by the view (a function of the viewing direction and
+/// distance, the same for every detection from one view), so that a point seen again from another
+/// angle or distance does not always match while two detections from one place do, plus each
+/// detection's own noise. The randomness is the landmark's and the track's own (the pixel noise and
+/// everything else is unchanged by it).
 struct DescriptorSimParams {
   bool enabled = true;
   double same_view_bits = 12.0;      ///< mean bits differing between two detections from the same view [bits]
   double bits_per_rad = 110.0;       ///< more per radian between the viewing directions [bits/rad]
-  double bits_per_log_scale = 60.0;  ///< more per unit of |ln(distance / first distance)| [bits]
+  double bits_per_log_scale = 60.0;  ///< more per unit of |ln(distance_1 / distance_2)| [bits]
   /// A front end that looks again where the filter expects a landmark finds its corner with this
   /// probability (detection is not perfectly repeatable) [probability].
   double redetect_probability = 0.8;
@@ -77,6 +78,9 @@ class TrackingCamera {
   CameraFrame observe(const TrajectorySample& sample, std::mt19937_64* rng);
   /// Ends every track (an image with nothing to follow, e.g. a covered lens).
   void loseTracks() { tracked_.clear(); }
+  /// A landmark's (index into the world) appearance seen from the camera at p_n_c; `salt` makes
+  /// the detection's own noise (a track's number, or an image's for a search).
+  std::optional<Descriptor> describe(std::int64_t landmark, std::uint64_t salt, const Vec3& p_n_c) const;
 
  private:
   struct Track {
@@ -84,9 +88,6 @@ class TrackingCamera {
     std::int64_t id;        ///< the track id the estimator sees
     std::optional<Descriptor> descriptor;
   };
-  /// A landmark's appearance seen from the camera at p_n_c; `salt` makes the draw (a track's
-  /// number, or an image's for a search).
-  std::optional<Descriptor> describe(std::int64_t landmark, std::uint64_t salt, const Vec3& p_n_c);
   /// CameraFrame::search and adopt for the frame just observed: the visible landmarks that are not
   /// tracked (index, noisy pixel), found inside a region with redetect_probability.
   void offerSearch(CameraFrame* frame, std::vector<std::pair<std::int64_t, Eigen::Vector2d>> untracked,
@@ -99,8 +100,6 @@ class TrackingCamera {
   std::unordered_map<std::int64_t, size_t> index_of_;  ///< world id -> index in the world
   std::vector<Track> tracked_;
   std::unordered_map<std::int64_t, std::int64_t> tracks_started_;  ///< per landmark index
-  /// Per landmark index: the first view's direction (landmark to camera, unit) and distance [m].
-  std::unordered_map<std::int64_t, std::pair<Vec3, double>> first_view_;
 };
 
 }  // namespace vi_ekf_slam::sim

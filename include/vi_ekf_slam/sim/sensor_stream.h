@@ -18,6 +18,7 @@ class SensorStream {
     std::optional<ImuData> imu;        ///< an IMU sample, or
     std::optional<CameraFrame> frame;  ///< a camera frame (stamp on the camera clock)
     size_t imu_index = 0;              ///< the IMU sample the stream has reached
+    bool reset_before = false;         ///< a kReset fault: the filter is reset before this frame
   };
 
   /// Frames start one camera period after t0; the IMU noise is drawn now, the frames' as they come.

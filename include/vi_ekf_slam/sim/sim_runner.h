@@ -29,6 +29,7 @@ struct SensorFault {
     kOutlierBurst,   ///< `outlier_fraction` of the tracks jump 20-60 px (mistracked features)
     kCameraCovered,  ///< images arrive without any feature
     kImuClipped,     ///< one IMU sample a second clipped at the range of ImuCheckParams (a bump)
+    kReset,          ///< the filter is reset at start_s (the node's ~reset), its tracks end there
   };
   Kind kind = Kind::kImageDropout;
   double start_s = 0.0;
@@ -88,6 +89,12 @@ struct FrameRecord {
   double filter_ms = 0.0;      ///< wall time of the pipeline on the IMU sample that released the frame (propagation,
                                ///< update, new landmarks, composition)
   double initialized_t = 0.0;  ///< when the filter was (last) initialized [s]
+  /// The filter was placed in the kept map just before this frame: the relocalization's inliers
+  /// and those of them that paired a feature with another point (the simulator knows).
+  bool relocalized = false;
+  int relocalization_inliers = 0;
+  int relocalization_false_pairs = 0;
+  bool in_map = false;  ///< the filter's world is the kept map's (VioPipeline::inMap)
 };
 
 struct SimRun {

@@ -1,0 +1,90 @@
+// Relocalization (map_archive.h) on the simulator's corridor walked there and back: the filter is
+// reset on the way back, in a place it has mapped; the new run is placed back in the kept map
+// within a second of its start, with the error it had before the reset plus at most 0.1 m, and no
+// relocalization pairs a feature with another point (the simulator knows). Without the kept map
+// the new run only continues from its last estimate.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstdio>
+#include <future>
+#include <random>
+
+#include "corridor_return.h"
+#include "vi_ekf_slam/sim/monte_carlo.h"
+#include "vi_ekf_slam/sim/sim_runner.h"
+
+namespace vi_ekf_slam::sim {
+namespace {
+
+constexpr int kRuns = 3;
+/// Into the way back (the U-turn is near 28 s of the walk, 14 s into the cut) [s after its start].
+constexpr double kResetAfterS = 24.0;
+
+struct ResetOutcome {
+  double error_before_m = NAN;  ///< position error on the last frame before the reset
+  double restart_t = NAN;       ///< the new run's start [s]
+  double relocalized_t = NAN;   ///< NaN: never
+  double error_after_m = NAN;   ///< the largest position error over the second after relocalizing
+  int inliers = 0, false_pairs = 0;
+  double error_1s_after_restart_m = NAN;  ///< (for the run without the kept map) [m]
+};
+
+ResetOutcome resetRun(Scenario sc, bool relocalize, std::uint64_t seed) {
+  const double t_reset = sc.trajectory->startTime() + kResetAfterS;
+  sc.faults = {{SensorFault::Kind::kReset, t_reset, 0.0}};
+  EkfSlamConfig c;
+  c.imu_noise = sc.imu.noise;
+  c.update.pixel_noise_px = sc.cam.pixel_noise_px;
+  c.map.enabled = true;
+  c.map.relocalize = relocalize;
+  std::mt19937_64 rng(seed);
+  const NavState truth0 = trueNavState(*sc.trajectory, sc.trajectory->startTime());
+  const NavState init = drawInitialEstimate(truth0, c.initial, rng);
+  const SimRun run = runSimulation(sc, c, init, rng);
+  ResetOutcome o;
+  for (const FrameRecord& f : run.frames) {
+    const double e = (f.estimate.p_n_b - f.truth.p_n_b).norm();
+    if (f.t < t_reset) o.error_before_m = e;
+    if (f.t >= t_reset && std::isnan(o.restart_t) && f.initialized_t >= t_reset) o.restart_t = f.initialized_t;
+    if (f.relocalized && std::isnan(o.relocalized_t)) {
+      o.relocalized_t = f.t;
+      o.inliers = f.relocalization_inliers;
+    }
+    o.false_pairs += f.relocalization_false_pairs;
+    if (!std::isnan(o.relocalized_t) && f.t <= o.relocalized_t + 1.0) {
+      o.error_after_m = std::isnan(o.error_after_m) ? e : std::max(o.error_after_m, e);
+    }
+    if (!std::isnan(o.restart_t) && std::isnan(o.error_1s_after_restart_m) && f.t >= o.restart_t + 1.0) {
+      o.error_1s_after_restart_m = e;
+    }
+  }
+  std::printf("seed %llu relocalize %d: error before %.3f m, restart %.2f s after the reset, relocalized %.2f s after "
+              "the restart (%d inliers, %d false), error over the next second %.3f m, 1 s after the restart %.3f m\n",
+              static_cast<unsigned long long>(seed), relocalize, o.error_before_m, o.restart_t - t_reset,
+              o.relocalized_t - o.restart_t, o.inliers, o.false_pairs, o.error_after_m, o.error_1s_after_restart_m);
+  return o;
+}
+
+}  // namespace
+
+TEST(Relocalization, AResetInAMappedPlaceRejoinsTheOldMap) {
+  const Scenario sc = corridorReturn(0);
+  std::vector<std::future<ResetOutcome>> kept, forgot;
+  for (int r = 0; r < kRuns; ++r) {
+    kept.push_back(std::async(std::launch::async, [&sc, r] { return resetRun(sc, true, 5100 + r); }));
+    forgot.push_back(std::async(std::launch::async, [&sc, r] { return resetRun(sc, false, 5100 + r); }));
+  }
+  for (int r = 0; r < kRuns; ++r) {
+    const ResetOutcome k = kept[static_cast<size_t>(r)].get();
+    const ResetOutcome f = forgot[static_cast<size_t>(r)].get();
+    ASSERT_FALSE(std::isnan(k.restart_t));
+    ASSERT_FALSE(std::isnan(k.relocalized_t)) << "run " << r << " never relocalized";
+    EXPECT_LE(k.relocalized_t - k.restart_t, 1.0);
+    EXPECT_EQ(k.false_pairs, 0);
+    EXPECT_LE(k.error_after_m, k.error_before_m + 0.1);
+    EXPECT_TRUE(std::isnan(f.relocalized_t));  // the kept map is what relocalizes
+  }
+}
+
+}  // namespace vi_ekf_slam::sim
