@@ -5,10 +5,12 @@
 // alignment), and what needs no ground truth (health.json / health.md / <run>_trace.csv). The
 // second form (--recorded) evaluates recordings of live replays of the same bag with the same
 // metrics. vi_ekf_slam_run_bag --help lists the options; docs/evaluation.md explains them.
+#include <algorithm>
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <functional>
 #include <iomanip>
 #include <iostream>
 #include <nlohmann/json.hpp>
@@ -65,6 +67,8 @@ struct Options {
   std::vector<std::string> references, reference_alignment, reference_frame, reference_clock, reference_from_s;
   std::vector<std::string> recorded;  ///< NAME=BAG
   std::vector<std::string> params;    ///< name=value
+  std::vector<double> reset_at_s;     ///< forced resets (the ~reset service), seconds after the bag's start
+  bool save_map = false;              ///< write the kept map to map_file at the end (~save_map)
 };
 
 /// Parses argv into *o (--help and usage errors exit, as every tool's).
@@ -100,7 +104,11 @@ void parseArguments(int argc, char** argv, Options* o) {
       "imu | camera: the clock of the reference's stamps (default imu)")(
       "reference-from-s", po::value(&o->reference_from_s)->composing(),
       "compare only from this many seconds after the bag's start (default 0)")(
-      "recorded", po::value(&o->recorded)->composing(), "NAME=REC.bag: a recording of a live replay (repeatable)");
+      "recorded", po::value(&o->recorded)->composing(), "NAME=REC.bag: a recording of a live replay (repeatable)")(
+      "reset-at", po::value(&o->reset_at_s)->composing(),
+      "reset the filter (as the ~reset service does) this many seconds after the bag's start (repeatable)")(
+      "save-map", po::bool_switch(&o->save_map),
+      "at the end, write the kept map to the map_file parameter (as ~save_map does; needs keep_map)");
   const po::variables_map vm = cli::parse(
       argc, argv, usage,
       "Runs the node's processor over a bag offline (deterministic, as fast as the CPU allows) and evaluates it.", d);
@@ -266,9 +274,22 @@ void runOne(const Options& o, const std::string& mechanization, const glue::Inpu
   if (o.segments) sink.processor = &processor;
   const double bag_s = info.end - info.start;
   eval::Progress progress(name, bag_s);  // on a terminal only
-  const double wall =
-      glue::replayBag(o.bag, topics, processor, tf, [&](double done, double) { progress.update(done); });
+  std::vector<double> resets = o.reset_at_s;
+  std::sort(resets.begin(), resets.end(), std::greater<>());  // the next one last
+  const double wall = glue::replayBag(o.bag, topics, processor, tf, [&](double done, double) {
+    progress.update(done);
+    if (!resets.empty() && done >= resets.back()) {
+      processor.reset("forced at " + std::to_string(resets.back()) + " s (--reset-at)");
+      resets.pop_back();
+    }
+  });
   progress.finish();
+  if (o.save_map) {
+    std::string message;
+    const bool saved = processor.saveMap(&message);
+    std::printf("  %s%s\n", saved ? "" : "map not saved: ", message.c_str());
+    if (!saved) throw std::runtime_error("--save-map: " + message);
+  }
   fs::create_directories(o.out);
   std::vector<eval::StampedPose> traj;
   for (const auto& p : sink.poses) traj.push_back({p.t, p.p, p.q, p.cov});
@@ -285,6 +306,12 @@ void runOne(const Options& o, const std::string& mechanization, const glue::Inpu
   h["output_s"] = sink.poses.size() > 1 ? sink.poses.back().t - sink.poses.front().t : 0.0;
   h["input_s"] = bag_s;
   h["inputs"] = inputCounters(processor.counters());
+  if (params.filter.map.enabled && params.filter.map.relocalize) {
+    h["relocalizations"] = processor.pipeline().relocalizations();
+    h["map_points"] = processor.pipeline().map().size();
+    std::printf("  kept map: %d points across resets, %d relocalizations\n", processor.pipeline().map().size(),
+                processor.pipeline().relocalizations());
+  }
   if (const EkfSlam* f = processor.filter(); f && params.filter.estimate_extrinsic) {
     h["extrinsic"] = extrinsicReport(*f);
     std::printf("  camera-IMU extrinsic estimated: %s\n", h["extrinsic"].dump().c_str());

@@ -357,11 +357,18 @@ bool EkfSlam::initializeLandmark(const FeatureObservation& obs, double inverse_d
 }
 
 void EkfSlam::removeLandmarksById(const std::vector<std::int64_t>& ids) {
+  // The well-mapped ones leave for the map kept across resets (VioPipeline's archive).
+  if (config_.map.enabled && config_.map.relocalize) {
+    const std::unordered_set<std::int64_t> leaving(ids.begin(), ids.end());
+    for (const MapPoint& p : mapPoints())
+      if (leaving.count(p.id)) left_the_state_.push_back(p);
+  }
   std::vector<int> indices;
   for (auto id : ids) {
     if (auto i = state_.findLandmark(id)) indices.push_back(*i);
     last_seen_.erase(id);
     descriptors_.erase(id);
+    latest_descriptors_.erase(id);
     dormant_.erase(id);
   }
   state_.removeLandmarks(indices);
@@ -456,6 +463,8 @@ FrameResult EkfSlam::processFrame(const CameraFrame& camera_frame) {
     forgetEndedRevisits(frame, revisits);
   }
   r.dormant_landmarks = static_cast<int>(dormant_.size());
+  r.left_the_state = std::move(left_the_state_);
+  left_the_state_.clear();
   if (shouldCompose(static_cast<int>(r.new_ids.size()))) {
     try {
       delayed_.beforeComposition(state_);
@@ -677,8 +686,11 @@ bool EkfSlam::wellMapped(int i) const {
 }
 
 void EkfSlam::rememberAppearance(const std::vector<FeatureObservation>& observed) {
-  for (const auto& f : observed)
-    if (f.descriptor && state_.findLandmark(f.id)) descriptors_[f.id] = *f.descriptor;
+  for (const auto& f : observed) {
+    if (!state_.findLandmark(f.id)) continue;
+    if (f.descriptor && !descriptors_.count(f.id)) descriptors_[f.id] = *f.descriptor;
+    if (const auto& d = f.latest_descriptor ? f.latest_descriptor : f.descriptor) latest_descriptors_[f.id] = *d;
+  }
 }
 
 void EkfSlam::forgetEndedRevisits(const CameraFrame& frame, const std::vector<RevisitMatch>& started) {
@@ -693,9 +705,9 @@ void EkfSlam::forgetEndedRevisits(const CameraFrame& frame, const std::vector<Re
 std::vector<MapPoint> EkfSlam::mapPoints() const {
   std::vector<MapPoint> out;
   for (const NavLandmark& l : navLandmarks(state_)) {
-    const auto d = descriptors_.find(l.id);
+    const auto d = latest_descriptors_.find(l.id);
     const std::optional<int> i = state_.findLandmark(l.id);
-    if (d == descriptors_.end() || !i || !wellMapped(*i)) continue;
+    if (d == latest_descriptors_.end() || !i || !wellMapped(*i)) continue;
     out.push_back({l.id, l.p_n_l, l.cov, d->second});
   }
   return out;
@@ -724,6 +736,7 @@ void EkfSlam::moveWorld(const Eigen::Isometry3d& T_new_old) {
 
 void EkfSlam::forgetMap() {
   descriptors_.clear();
+  latest_descriptors_.clear();
   dormant_.clear();
   revisiting_.clear();
 }

@@ -114,7 +114,7 @@ std::vector<FeatureObservation> FeatureTracker::searchCorners(const cv::Mat& img
 
 std::int64_t FeatureTracker::adoptCorner(const FeatureObservation& corner) {
   const cv::Point2f p(static_cast<float>(corner.uv.x()), static_cast<float>(corner.uv.y()));
-  tracks_.push_back({next_id_++, p, 1, {p}, corner.descriptor});
+  tracks_.push_back({next_id_++, p, 1, {p}, corner.descriptor, corner.descriptor});
   return tracks_.back().id;
 }
 
@@ -215,13 +215,15 @@ CameraFrame FeatureTracker::track(double timestamp, const cv::Mat& img,
     for (const auto& t : tracks_) pts.push_back(t.uv);
     const auto desc = describe(img, pts);
     for (size_t i = 0; i < pts.size(); ++i)
-      if (desc[i]) tracks_[i].descriptor = desc[i];
+      if (desc[i]) tracks_[i].latest_descriptor = desc[i];
   }
   prev_pyramid_ = std::move(pyramid);
   prev_image_ = img;
   CameraFrame f;
   f.timestamp = timestamp;
-  for (const auto& t : tracks_) f.features.push_back({t.id, Eigen::Vector2d(t.uv.x, t.uv.y), t.descriptor});
+  for (const auto& t : tracks_) {
+    f.features.push_back({t.id, Eigen::Vector2d(t.uv.x, t.uv.y), t.descriptor, t.latest_descriptor});
+  }
   stats_.total = static_cast<int>(tracks_.size());
   if (params_.descriptors) {
     f.search = [this, img](const std::vector<SearchRegion>& regions) { return searchCorners(img, regions); };
@@ -299,7 +301,7 @@ void FeatureTracker::detect(const cv::Mat& img) {
     if (count[c] >= quota) continue;
     ++count[c];
     cv::circle(mask, k.p, radius, cv::Scalar(0), -1);
-    tracks_.push_back({next_id_++, k.p, 1, {k.p}, std::nullopt});
+    tracks_.push_back({next_id_++, k.p, 1, {k.p}, std::nullopt, std::nullopt});
     ++added;
   }
   stats_.detected = added;
@@ -307,7 +309,10 @@ void FeatureTracker::detect(const cv::Mat& img) {
     std::vector<cv::Point2f> pts;
     for (size_t i = tracks_.size() - static_cast<size_t>(added); i < tracks_.size(); ++i) pts.push_back(tracks_[i].uv);
     const auto desc = describe(img, pts);
-    for (size_t i = 0; i < pts.size(); ++i) tracks_[tracks_.size() - pts.size() + i].descriptor = desc[i];
+    for (size_t i = 0; i < pts.size(); ++i) {
+      Track& t = tracks_[tracks_.size() - pts.size() + i];
+      t.descriptor = t.latest_descriptor = desc[i];
+    }
   }
 }
 

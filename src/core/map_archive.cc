@@ -97,10 +97,9 @@ bool MapArchive::load(const std::string& path, std::string* error) {
       points_.clear();
       return true;
     }
-    if (ids.rows != n || positions.rows != n || covariances.rows != n || descriptors.rows != n ||
-        positions.cols != 3 || covariances.cols != 9 || descriptors.cols != static_cast<int>(Descriptor().size()) ||
-        ids.type() != CV_64F || positions.type() != CV_64F || covariances.type() != CV_64F ||
-        descriptors.type() != CV_8U) {
+    if (ids.rows != n || positions.rows != n || covariances.rows != n || descriptors.rows != n || positions.cols != 3 ||
+        covariances.cols != 9 || descriptors.cols != static_cast<int>(Descriptor().size()) || ids.type() != CV_64F ||
+        positions.type() != CV_64F || covariances.type() != CV_64F || descriptors.type() != CV_8U) {
       return fail("ids, positions_m, covariances_m2 and descriptors must have 'points' rows of 1, 3, 9 and 32 values");
     }
     for (int i = 0; i < n; ++i) {
@@ -149,10 +148,12 @@ std::optional<Relocalization> relocalize(const MapArchive& map, const std::vecto
   std::vector<Descriptor> query_d;
   for (const auto& f : features) {
     Eigen::Vector2d xn;
-    if (!f.descriptor || !f.uv.allFinite() || !camera.pixelToNormalized(f.uv, &xn)) continue;
+    // A track's latest view is the nearest to this one.
+    const std::optional<Descriptor>& d = f.latest_descriptor ? f.latest_descriptor : f.descriptor;
+    if (!d || !f.uv.allFinite() || !camera.pixelToNormalized(f.uv, &xn)) continue;
     query.push_back(&f);
     rays.push_back(xn);
-    query_d.push_back(*f.descriptor);
+    query_d.push_back(*d);
   }
   const int min_inliers = std::max(4, params.relocalize_min_inliers);
   if (static_cast<int>(query.size()) < min_inliers || map.size() < min_inliers) {

@@ -99,8 +99,8 @@ void VioPipeline::tryRelocalize(const CameraFrame& frame) {
   e.precision(3);
   const Eigen::Vector3d& t = r->T_m_n.translation();
   e << "relocalized in the kept map: " << r->inliers << " of " << r->matches << " matches to " << map_.size()
-    << " map points agree (" << r->reprojection_rms_px << " px rms, tilt " << r->tilt_deg << " deg); the world moved by "
-    << t.norm() << " m and "
+    << " map points agree (" << r->reprojection_rms_px << " px rms, tilt " << r->tilt_deg
+    << " deg); the world moved by " << t.norm() << " m and "
     << std::atan2(r->T_m_n.linear()(1, 0), r->T_m_n.linear()(0, 0)) * 180.0 / M_PI << " deg of yaw";
   listener_.relocalized(*r, e.str(), *filter_);
 }
@@ -282,6 +282,8 @@ void VioPipeline::process(QueuedFrame& f) {
   features.timestamp = f.t;
   FrameResult r = filter_->processFrame(features);
   std::optional<NavState> nav;
+  // The map kept across resets: the points leaving a filter that is in it, or placing one that is not.
+  if (r.processed && r.lost.empty() && keepsMapAcrossRuns() && in_map_) map_.merge(r.left_the_state);
   if (r.processed && r.lost.empty() && keepsMapAcrossRuns() && !in_map_ && !map_.empty()) tryRelocalize(features);
   if (r.processed && r.lost.empty()) {
     nav = filter_->navState();

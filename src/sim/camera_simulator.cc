@@ -38,8 +38,7 @@ Descriptor landmarkPattern(std::int64_t landmark, const DescriptorSimParams& par
   return d;
 }
 
-std::optional<Descriptor> TrackingCamera::describe(std::int64_t landmark, std::uint64_t salt,
-                                                   const Vec3& p_n_c) const {
+std::optional<Descriptor> TrackingCamera::describe(std::int64_t landmark, std::uint64_t salt, const Vec3& p_n_c) const {
   const DescriptorSimParams& p = params_.descriptors;
   if (!p.enabled) return std::nullopt;
   const Vec3 ray = p_n_c - world_.at(static_cast<size_t>(landmark)).p_n;
@@ -132,14 +131,14 @@ CameraFrame TrackingCamera::observe(const TrajectorySample& s, std::mt19937_64* 
     used[static_cast<size_t>(best)] = true;
     const std::int64_t landmark = candidates[static_cast<size_t>(best)];
     const std::int64_t k = tracks_started_[landmark]++;
-    kept.push_back(
-        {landmark, trackId(landmark, k, world_.size()), describe(landmark, static_cast<std::uint64_t>(k), p_n_c)});
+    const std::optional<Descriptor> d = describe(landmark, static_cast<std::uint64_t>(k), p_n_c);
+    kept.push_back({landmark, trackId(landmark, k, world_.size()), d, d});
     ++occupancy[static_cast<size_t>(cellOf(uv_of[landmark]))];
   }
   // A tracker describes its tracks again every kDescribeEveryFrames images (the appearance the
   // map keeps is the latest view's, which is what a return to the same place sees).
   if (frames_ % kDescribeEveryFrames == 0) {
-    for (auto& track : kept) track.descriptor = describe(track.landmark, (frames_ << 20) + 3, p_n_c);
+    for (auto& track : kept) track.latest_descriptor = describe(track.landmark, (frames_ << 20) + 3, p_n_c);
   }
   tracked_ = kept;
   CameraFrame f;
@@ -151,7 +150,7 @@ CameraFrame TrackingCamera::observe(const TrajectorySample& s, std::mt19937_64* 
       const double du = n(*rng), dv = n(*rng);
       uv += params_.pixel_noise_px * Eigen::Vector2d(du, dv);
     }
-    f.features.push_back({track.id, uv, track.descriptor});
+    f.features.push_back({track.id, uv, track.descriptor, track.latest_descriptor});
   }
   ++frames_;
   if (params_.descriptors.enabled) {
@@ -191,7 +190,7 @@ void TrackingCamera::offerSearch(CameraFrame* frame, std::vector<std::pair<std::
   frame->adopt = [this, found](const FeatureObservation& corner) {
     const std::int64_t landmark = found->at(static_cast<size_t>(corner.id));
     const std::int64_t k = tracks_started_[landmark]++;
-    tracked_.push_back({landmark, trackId(landmark, k, world_.size()), corner.descriptor});
+    tracked_.push_back({landmark, trackId(landmark, k, world_.size()), corner.descriptor, corner.descriptor});
     return tracked_.back().id;
   };
 }

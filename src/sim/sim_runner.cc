@@ -8,6 +8,7 @@
 #include <limits>
 #include <memory>
 #include <optional>
+#include <stdexcept>
 
 #include "vi_ekf_slam/core/so3.h"
 
@@ -260,6 +261,10 @@ SimRun runSimulation(const Scenario& sc, const EkfSlamConfig& config, const NavS
   RunRecorder recorder(sc, imu, callback, keep_frames, &run);
   VioPipeline pipeline(config, simulatedNodeStart(sc, config), sc.camera, sc.given_T_b_c.value_or(sc.T_b_c), recorder);
   recorder.pipeline = &pipeline;
+  std::string map_error;
+  if (!sc.load_map_file.empty() && !pipeline.loadMap(sc.load_map_file, &map_error)) {
+    throw std::runtime_error(map_error);
+  }
   // A start from the initializers knows neither position nor yaw: it is registered to the truth's
   // with an error drawn from the filter's prior, as a prior start is. A start over after the filter
   // was lost continues from its last estimate, as the node's odometry does.
@@ -295,6 +300,9 @@ SimRun runSimulation(const Scenario& sc, const EkfSlamConfig& config, const NavS
   recorder.tic = std::chrono::steady_clock::now();
   pipeline.flush();
   run.final_landmarks = pipeline.filter().landmarks();
+  if (!sc.save_map_file.empty() && !pipeline.saveMap(sc.save_map_file, &map_error)) {
+    throw std::runtime_error(map_error);
+  }
   return run;
 }
 

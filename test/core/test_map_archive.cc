@@ -145,7 +145,8 @@ TEST(Relocalization, RecoversTheYawAndTranslationBetweenTheWorlds) {
   const CameraExtrinsics T_b_c = test::forwardCamera();
   // The body in the map, and the filter's world {n} placed 35 deg and some metres away.
   const Eigen::Isometry3d T_m_b = pose(expSO3(Vec3(0.05, -0.03, 1.2)), Vec3(3.0, -2.0, 1.4));
-  const Eigen::Isometry3d T_m_n_true = pose(Eigen::AngleAxisd(0.61, Vec3::UnitZ()).toRotationMatrix(), Vec3(-4, 7, 0.3));
+  const Eigen::Isometry3d T_m_n_true =
+      pose(Eigen::AngleAxisd(0.61, Vec3::UnitZ()).toRotationMatrix(), Vec3(-4, 7, 0.3));
   const Eigen::Isometry3d T_n_b = T_m_n_true.inverse() * T_m_b;
   const View v = viewOf(T_m_b, cam, T_b_c, 60, 15, rng);
   MapMemoryParams params;

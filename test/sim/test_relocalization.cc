@@ -6,6 +6,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <filesystem>
 #include <cstdio>
 #include <future>
 #include <random>
@@ -59,10 +60,11 @@ ResetOutcome resetRun(Scenario sc, bool relocalize, std::uint64_t seed) {
       o.error_1s_after_restart_m = e;
     }
   }
-  std::printf("seed %llu relocalize %d: error before %.3f m, restart %.2f s after the reset, relocalized %.2f s after "
-              "the restart (%d inliers, %d false), error over the next second %.3f m, 1 s after the restart %.3f m\n",
-              static_cast<unsigned long long>(seed), relocalize, o.error_before_m, o.restart_t - t_reset,
-              o.relocalized_t - o.restart_t, o.inliers, o.false_pairs, o.error_after_m, o.error_1s_after_restart_m);
+  std::printf(
+      "seed %llu relocalize %d: error before %.3f m, restart %.2f s after the reset, relocalized %.2f s after "
+      "the restart (%d inliers, %d false), error over the next second %.3f m, 1 s after the restart %.3f m\n",
+      static_cast<unsigned long long>(seed), relocalize, o.error_before_m, o.restart_t - t_reset,
+      o.relocalized_t - o.restart_t, o.inliers, o.false_pairs, o.error_after_m, o.error_1s_after_restart_m);
   return o;
 }
 
@@ -85,6 +87,54 @@ TEST(Relocalization, AResetInAMappedPlaceRejoinsTheOldMap) {
     EXPECT_LE(k.error_after_m, k.error_before_m + 0.1);
     EXPECT_TRUE(std::isnan(f.relocalized_t));  // the kept map is what relocalizes
   }
+}
+
+TEST(Relocalization, ASecondWalkStartsInTheMapSavedByTheFirst) {
+  // The first walk maps the corridor there and back and saves the map; the second starts later on
+  // the same walk in a world of its own (2 m and 40 deg away: a new session knows nothing), and is
+  // placed in the saved map as soon as it sees it.
+  const std::string file = (std::filesystem::temp_directory_path() / "vi_ekf_slam_relocalization_map.yaml").string();
+  std::remove(file.c_str());
+  Scenario first = corridorReturn(0);
+  first.save_map_file = file;
+  EkfSlamConfig c;
+  c.imu_noise = first.imu.noise;
+  c.update.pixel_noise_px = first.cam.pixel_noise_px;
+  c.map.enabled = true;
+  std::mt19937_64 rng(61);
+  const NavState truth0 = trueNavState(*first.trajectory, first.trajectory->startTime());
+  const SimRun one = runSimulation(first, c, drawInitialEstimate(truth0, c.initial, rng), rng);
+  const double mapped_error = (one.frames.back().estimate.p_n_b - one.frames.back().truth.p_n_b).norm();
+  MapArchive saved;
+  std::string error;
+  ASSERT_TRUE(saved.load(file, &error)) << error;
+  EXPECT_GT(saved.size(), 300);  // what left the state while walking, not only the last view
+
+  Scenario second = corridorReturn(0);
+  second.load_map_file = file;
+  const double t1 = first.trajectory->startTime() + 8.0;
+  second.trajectory = std::make_shared<TruncatedTrajectory>(second.trajectory, t1, t1 + 12.0);
+  NavState start = trueNavState(*second.trajectory, t1);
+  const Eigen::AngleAxisd yaw(0.7, Vec3::UnitZ());
+  start.q_n_b = Quat(yaw) * start.q_n_b;
+  start.v_n_b = yaw * start.v_n_b;
+  start.p_n_b += Vec3(2.0, -1.0, 0.0);
+  const SimRun two = runSimulation(second, c, start, rng);
+  double relocalized_t = NAN, worst_after = 0.0;
+  int false_pairs = 0;
+  for (const FrameRecord& f : two.frames) {
+    if (f.relocalized && std::isnan(relocalized_t)) relocalized_t = f.t;
+    false_pairs += f.relocalization_false_pairs;
+    if (!std::isnan(relocalized_t)) worst_after = std::max(worst_after, (f.estimate.p_n_b - f.truth.p_n_b).norm());
+  }
+  std::printf(
+      "map of %d points (error at its end %.3f m); relocalized %.2f s after the start, worst error after %.3f m\n",
+      saved.size(), mapped_error, relocalized_t - t1, worst_after);
+  ASSERT_FALSE(std::isnan(relocalized_t));
+  EXPECT_LE(relocalized_t - t1, 1.0);
+  EXPECT_EQ(false_pairs, 0);
+  EXPECT_LT(worst_after, 0.5);  // started 2.2 m off; the map itself is off by its own error
+  std::remove(file.c_str());
 }
 
 }  // namespace vi_ekf_slam::sim

@@ -35,6 +35,9 @@ struct FrameResult {
   std::vector<RevisitMatch> revisits;
   int revisits_rejected = 0;
   int dormant_landmarks = 0;  ///< after this frame
+  /// Well-mapped landmarks with an appearance that left the state with this frame (room for new
+  /// ones), in {n}: the map kept across resets takes them (map_relocalize).
+  std::vector<MapPoint> left_the_state;
   bool composed = false;
   StationaryDetector::Decision stationary;  ///< the standing test of this frame
   bool zero_velocity_applied = false;       ///< stationary and the zero-velocity update passed its gate
@@ -196,8 +199,10 @@ class EkfSlam {
   static void addUnseenMotion(FilterState& s, const Vec3& var_p, const Vec3& var_v, const Vec3& var_psi);
   int zero_velocity_updates_ = 0;
   // Keeping the map (map_memory.h).
-  std::unordered_map<std::int64_t, Descriptor> descriptors_;  ///< of landmarks in the state
-  std::unordered_set<std::int64_t> dormant_;                  ///< landmarks whose tracks ended, kept
+  std::unordered_map<std::int64_t, Descriptor> descriptors_;  ///< of landmarks in the state (their tracks' first)
+  std::unordered_map<std::int64_t, Descriptor> latest_descriptors_;  ///< their latest views' (what mapPoints keeps)
+  std::vector<MapPoint> left_the_state_;      ///< removed during the current frame (FrameResult::left_the_state)
+  std::unordered_set<std::int64_t> dormant_;  ///< landmarks whose tracks ended, kept
   /// A track that found a landmark again -> that landmark; kNotRevisit: its match was refused by the
   /// update's gate, it is a new point (a track is matched once).
   std::unordered_map<std::int64_t, std::int64_t> revisiting_;
@@ -219,7 +224,8 @@ class EkfSlam {
   bool wellMapped(int i) const;
   /// Landmark i's position (in {s}) and the trace of its covariance [m^2].
   std::pair<Vec3, double> landmarkPositionVariance(int i) const;
-  /// Keeps the latest descriptor of every observed landmark (its latest view's appearance).
+  /// Keeps the first descriptor of every observed landmark (what revisits match) and its latest
+  /// view's (what the map kept across resets holds).
   void rememberAppearance(const std::vector<FeatureObservation>& observed);
   /// Landmarks leaving the tracked map: dormant (keep_map and a descriptor) or dropped (into *drop);
   /// then dormant ones are dropped (retire's rule) until `wanted` new ones fit in max_landmarks and

@@ -89,7 +89,8 @@ class FeatureTracker {
     cv::Point2f uv;
     int age;
     std::vector<cv::Point2f> history;
-    std::optional<Descriptor> descriptor;  ///< its latest description (kDescribeEveryFrames)
+    std::optional<Descriptor> descriptor;         ///< where it was detected
+    std::optional<Descriptor> latest_descriptor;  ///< described again every kDescribeEveryFrames
   };
   void detect(const cv::Mat& img);
   /// ORB descriptors at the points (none for a point too near the border to describe).

@@ -57,10 +57,10 @@ class MapArchive {
 /// A new run's world placed in the map.
 struct Relocalization {
   Eigen::Isometry3d T_m_n = Eigen::Isometry3d::Identity();  ///< a rotation about z and a translation
-  int matches = 0;                                           ///< appearance matches tried [count]
-  int inliers = 0;                                           ///< reprojecting within the threshold [count]
-  double reprojection_rms_px = 0.0;                          ///< of the inliers [px]
-  double tilt_deg = 0.0;  ///< between the PnP camera's gravity and the filter's [deg]
+  int matches = 0;                                          ///< appearance matches tried [count]
+  int inliers = 0;                                          ///< reprojecting within the threshold [count]
+  double reprojection_rms_px = 0.0;                         ///< of the inliers [px]
+  double tilt_deg = 0.0;                                    ///< between the PnP camera's gravity and the filter's [deg]
   /// An inlier: the image's feature (its id, or a searched corner's) and the map point it is.
   struct Pair {
     std::int64_t feature_id = 0;

@@ -29,10 +29,12 @@ using Descriptor = std::array<std::uint8_t, 32>;
 struct FeatureObservation {
   std::int64_t id = 0;
   Eigen::Vector2d uv = Eigen::Vector2d::Zero();  ///< [px]
-  /// The track's appearance, if the front end gives one: described where it was detected and again
-  /// every kDescribeEveryFrames images; what finds the point again once the track has ended
-  /// (map_memory.h, map_archive.h).
+  /// The track's appearance where it was detected (the same on every image of the track), if the
+  /// front end gives one: what finds the point again once the track has ended (map_memory.h).
   std::optional<Descriptor> descriptor = std::nullopt;
+  /// Its appearance described again every kDescribeEveryFrames images (the latest view's): what
+  /// the map kept across resets holds (map_archive.h), as a return to the same place sees that one.
+  std::optional<Descriptor> latest_descriptor = std::nullopt;
 };
 
 /// How often a front end describes its tracks again [images]: the appearance kept with a landmark

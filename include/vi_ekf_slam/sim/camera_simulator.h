@@ -84,9 +84,10 @@ class TrackingCamera {
 
  private:
   struct Track {
-    std::int64_t landmark;  ///< index into the world
-    std::int64_t id;        ///< the track id the estimator sees
-    std::optional<Descriptor> descriptor;
+    std::int64_t landmark;                        ///< index into the world
+    std::int64_t id;                              ///< the track id the estimator sees
+    std::optional<Descriptor> descriptor;         ///< where it was detected
+    std::optional<Descriptor> latest_descriptor;  ///< described again every kDescribeEveryFrames
   };
   /// CameraFrame::search and adopt for the frame just observed: the visible landmarks that are not
   /// tracked (index, noisy pixel), found inside a region with redetect_probability.

@@ -75,6 +75,8 @@ struct Scenario {
   /// The sensors' stamps are rounded to this, as a recorder's clock keeps them (1e-9: ROS time);
   /// 0: exact [s].
   double stamp_resolution_s = 0.0;
+  /// A map file (VioPipeline::loadMap) the run starts with, and one it saves at its end ("": none).
+  std::string load_map_file, save_map_file;
 };
 
 /// One camera time of a run.
