@@ -8,6 +8,7 @@
 #include <tf2/exceptions.h>
 
 #include "vi_ekf_slam/core/allocator_tuning.h"
+#include "vi_ekf_slam/core/frames.h"
 #include "vi_ekf_slam/ros/conversions.h"
 
 namespace vi_ekf_slam::glue {
@@ -307,7 +308,10 @@ void EkfSlamProcessor::imuBridged(const ImuData& imu, ImuSampleVerdict why) {
 
 void EkfSlamProcessor::relocalized(const Relocalization& r, const std::string& event, EkfSlam& /*filter*/) {
   ROS_INFO_STREAM("vi_ekf_slam: " << event);
-  frames_.relocalized(r.T_m_n, !params_.node.map_frame.empty());
+  // The move in the z-up world the outputs are in: the same move seen through the fixed turn {n} -> world.
+  Eigen::Isometry3d C = Eigen::Isometry3d::Identity();
+  C.linear() = zUpWorldFromNav().toRotationMatrix();
+  frames_.relocalized(C * r.T_m_n * C.inverse(), !params_.node.map_frame.empty());
   sink_.event(event);
 }
 

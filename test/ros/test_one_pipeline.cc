@@ -3,10 +3,14 @@
 // them starts, queues or maps clocks in a way of its own.
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <cstdio>
+#include <filesystem>
 #include <map>
 #include <random>
 
 #include "vi_ekf_slam/core/frames.h"
+#include "vi_ekf_slam/core/map_archive.h"
 #include "vi_ekf_slam/ros/conversions.h"
 #include "vi_ekf_slam/ros/ekf_slam_processor.h"
 #include "vi_ekf_slam/sim/scenarios.h"
@@ -51,28 +55,14 @@ NodeParams nodeParams(const sim::Scenario& sc) {
   return p;
 }
 
-void expectSameTrajectory(double standing_s, const std::string& start) {
-  ros::Time::init();
-  sim::Scenario sc = scenario(standing_s);
-  const NodeParams params = nodeParams(sc);
-  sc.dynamic_init = withFilterSettings(params.dynamic_init, params.filter);
-  ASSERT_TRUE(pipelineParams(params).dynamic_init_enabled);
-  const NavState t0 = sim::trueNavState(*sc.trajectory, std::max(0.0, sc.trajectory->startTime()));
-
-  // The simulator's runner.
-  std::mt19937_64 rng(7);
-  const sim::SimRun run = sim::runSimulation(sc, params.filter, t0, rng);
-  ASSERT_GT(run.frames.size(), 100u);
-
-  // The same stream (same seed) as messages through the ROS processor, stamped from 1000 s on
-  // (ROS time cannot be negative; the IMU starts just before 0).
-  constexpr double kStampOffsetS = 1000.0;
-  OdomRecorder out;
-  EkfSlamProcessor processor(params, out, nullptr);
+/// The simulated stream (seeded) as messages through the ROS processor, stamped from 1000 s on
+/// (ROS time cannot be negative; the IMU starts just before 0).
+constexpr double kStampOffsetS = 1000.0;
+void feed(const sim::Scenario& sc, double t0, std::uint64_t seed, EkfSlamProcessor& processor) {
   std_msgs::Header camera_header;
   camera_header.frame_id = "camera";
-  std::mt19937_64 rng2(7);
-  sim::SensorStream stream(sc, t0.timestamp, rng2);
+  std::mt19937_64 rng(seed);
+  sim::SensorStream stream(sc, t0, rng);
   sim::SensorStream::Event e;
   processor.cameraInfo(toCameraInfo(sc.camera.intrinsics(), camera_header));
   while (stream.next(&e)) {
@@ -89,6 +79,25 @@ void expectSameTrajectory(double standing_s, const std::string& start) {
     camera_header.stamp.fromSec(e.frame->timestamp + kStampOffsetS);
     processor.features(*e.frame, camera_header);
   }
+}
+
+void expectSameTrajectory(double standing_s, const std::string& start) {
+  ros::Time::init();
+  sim::Scenario sc = scenario(standing_s);
+  const NodeParams params = nodeParams(sc);
+  sc.dynamic_init = withFilterSettings(params.dynamic_init, params.filter);
+  ASSERT_TRUE(pipelineParams(params).dynamic_init_enabled);
+  const NavState t0 = sim::trueNavState(*sc.trajectory, std::max(0.0, sc.trajectory->startTime()));
+
+  // The simulator's runner.
+  std::mt19937_64 rng(7);
+  const sim::SimRun run = sim::runSimulation(sc, params.filter, t0, rng);
+  ASSERT_GT(run.frames.size(), 100u);
+
+  // The same stream (same seed) through the ROS processor.
+  OdomRecorder out;
+  EkfSlamProcessor processor(params, out, nullptr);
+  feed(sc, t0.timestamp, 7, processor);
   for (const auto& ev : out.events) std::printf("event: %s\n", ev.c_str());
   std::printf("runner: started %.4f, %zu frames %.4f..%.4f; processor: %zu odometry %.4f..%.4f\n", run.initialized_t,
               run.frames.size(), run.frames.front().estimate.timestamp, run.frames.back().estimate.timestamp,
@@ -128,6 +137,43 @@ TEST(OnePipeline, TheProcessorAndTheSimulatorsRunnerGiveTheSameTrajectoryStartin
 
 TEST(OnePipeline, TheProcessorAndTheSimulatorsRunnerGiveTheSameTrajectoryStartingWhileMoving) {
   expectSameTrajectory(0.0, "initialized: dynamic");
+}
+
+TEST(OnePipeline, AMapSavedByOneNodeStartsTheNextInIt) {
+  // ~save_map after a walk writes map_file; a node started with that map_file is placed in it.
+  ros::Time::init();
+  const sim::Scenario sc = scenario(2.0);
+  NodeParams params = nodeParams(sc);
+  params.filter.map.enabled = true;
+  params.node.map_file = (std::filesystem::temp_directory_path() / "vi_ekf_slam_node_map.yaml").string();
+  std::remove(params.node.map_file.c_str());
+  const double t0 = std::max(0.0, sc.trajectory->startTime());
+  OdomRecorder first;
+  EkfSlamProcessor mapping(params, first, nullptr);
+  feed(sc, t0, 7, mapping);
+  std::string message;
+  ASSERT_TRUE(mapping.saveMap(&message)) << message;
+  std::printf("%s\n", message.c_str());
+  MapArchive saved;
+  ASSERT_TRUE(saved.load(params.node.map_file, &message)) << message;
+  EXPECT_GT(saved.size(), 50);
+  OdomRecorder second;
+  EkfSlamProcessor localized(params, second, nullptr);
+  EXPECT_EQ(localized.pipeline().map().size(), saved.size());
+  EXPECT_FALSE(localized.pipeline().inMap());
+  feed(sc, t0, 8, localized);
+  const bool relocalized = std::any_of(second.events.begin(), second.events.end(), [](const std::string& e) {
+    return e.find("relocalized in the kept map") != std::string::npos;
+  });
+  EXPECT_TRUE(relocalized);
+  EXPECT_TRUE(localized.pipeline().inMap());
+  // Without keep_map there is nothing to save, and the node says why.
+  params.filter.map.enabled = false;
+  OdomRecorder third;
+  EkfSlamProcessor plain(params, third, nullptr);
+  EXPECT_FALSE(plain.saveMap(&message));
+  EXPECT_NE(message.find("keep_map"), std::string::npos);
+  std::remove(params.node.map_file.c_str());
 }
 
 }  // namespace

@@ -194,4 +194,43 @@ TEST(OutputFrames, TheBaseWaitsForItsTransformAndTheWorldModeIsTheFiltersOwn) {
   EXPECT_TRUE(poseOf(same).isApprox(poseOf(imu), 1e-15));
 }
 
+TEST(OutputFrames, ARelocalizationRejoinsTheMapInOdomOrMovesMapToOdom) {
+  std::mt19937_64 rng(4);
+  const nav_msgs::Odometry imu = imuOdometry(rng);
+  // The map's world is the first one; the filter starts over in another world, placed in odom by
+  // continuity, then is relocalized: its world moves by T_m_n back into the map's.
+  const Iso T_new_old = makePose(Vec3(0.0, 0.0, 0.8), Vec3(-3.0, 4.0, 0.0));
+  nav_msgs::Odometry restarted = imu;
+  restarted.pose.pose = tf2::toMsg(Iso(T_new_old * poseOf(imu)));
+  const Iso drift = makePose(Vec3::Zero(), Vec3(0.3, 0, 0));
+  // The correction that puts the drifted pose back onto the map's: in the moved world the pose is
+  // the map's again.
+  const Iso T_m_n = drift.inverse() * T_new_old.inverse();
+  const nav_msgs::Odometry relocalized = imu;
+  for (const bool keep_odom : {false, true}) {
+    OutputFrames frames(TfMode::kOdom, "world", "odom", "");
+    ASSERT_EQ(frames.prepare("imu0", nullptr), "");
+    frames.worldIsMap();
+    const Iso first = poseOf(frames.odometry(imu));
+    EXPECT_TRUE(frames.odomFromMap().isApprox(Iso::Identity(), 1e-12));
+    frames.filterRestarted();
+    // A drifted restart: odom continues 0.3 m off where the map says the rig is.
+    nav_msgs::Odometry drifted = restarted;
+    drifted.pose.pose = tf2::toMsg(Iso(T_new_old * drift * poseOf(imu)));
+    const Iso continued = poseOf(frames.odometry(drifted));
+    EXPECT_LT((continued.translation() - first.translation()).norm(), 1e-9);
+    frames.relocalized(T_m_n, keep_odom);
+    const Iso after = poseOf(frames.odometry(relocalized));
+    if (keep_odom) {
+      // odom stays continuous; map -> odom takes the correction and places the rig where the map has it.
+      EXPECT_TRUE(after.isApprox(continued, 1e-9));
+      EXPECT_TRUE(Iso(frames.odomFromMap().inverse() * after).isApprox(poseOf(imu), 1e-9));
+    } else {
+      // odom rejoins the map: the pose is the map's, map -> odom stays the identity.
+      EXPECT_TRUE(after.isApprox(first, 1e-9));
+      EXPECT_TRUE(frames.odomFromMap().isApprox(Iso::Identity(), 1e-12));
+    }
+  }
+}
+
 }  // namespace vi_ekf_slam::glue

@@ -81,12 +81,12 @@ class OutputFrames {
  private:
   TfMode mode_;
   std::string world_frame_, odom_frame_, base_frame_;
-  std::optional<Eigen::Isometry3d> T_b_i_;       ///< the IMU in the base frame (from TF)
-  std::string imu_frame_;                        ///< the frame T_b_i_ was looked up for
-  std::optional<Eigen::Isometry3d> T_o_w_;       ///< the filter's current world in odom
-  std::optional<Eigen::Isometry3d> last_T_o_b_;  ///< the last published base pose
+  std::optional<Eigen::Isometry3d> T_b_i_;                   ///< the IMU in the base frame (from TF)
+  std::string imu_frame_;                                    ///< the frame T_b_i_ was looked up for
+  std::optional<Eigen::Isometry3d> T_o_w_;                   ///< the filter's current world in odom
+  std::optional<Eigen::Isometry3d> last_T_o_b_;              ///< the last published base pose
   Eigen::Isometry3d T_o_m_ = Eigen::Isometry3d::Identity();  ///< the kept map's frame in odom
-  bool world_is_map_ = false;  ///< the filter's world is the map's: T_o_m_ follows T_o_w_
+  bool world_is_map_ = false;                                ///< the filter's world is the map's: T_o_m_ follows T_o_w_
 };
 
 }  // namespace vi_ekf_slam::glue
