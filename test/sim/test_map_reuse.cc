@@ -2,7 +2,8 @@
 // whose tracks ended are found again on the way back, none of them is another point (the
 // simulator knows), also where the texture repeats, and the filter stays consistent. Weakening
 // the search (no ratio test, no joint compatibility, regions far wider than the filter's
-// uncertainty) lets false closures through, which shows the repeated-texture test can fail.
+// uncertainty, a loose descriptor bound) lets false closures through, which shows the
+// repeated-texture test can fail.
 #include <gtest/gtest.h>
 
 #include <cstdio>
