@@ -406,15 +406,22 @@ FrameResult EkfSlam::processFrame(const CameraFrame& camera_frame) {
     return r;
   }
   detectStanding(frame, at_rest, &r);
-  std::vector<FeatureObservation> known, fresh;
+  std::vector<FeatureObservation> known, fresh, pending;
   for (FeatureObservation f : frame.features) {
     // (An id in the clones' range is no track's: refused, it would observe a clone.)
     if (!f.uv.allFinite() || isCloneId(f.id)) continue;
+    if (pending_.count(f.id)) {
+      pending.push_back(f);
+      continue;
+    }
     if (const auto a = revisiting_.find(f.id); a != revisiting_.end() && a->second != kNotRevisit) f.id = a->second;
     (state_.findLandmark(f.id) ? known : fresh).push_back(f);
   }
-  const std::vector<RevisitMatch> revisits =
-      config_.map.enabled ? findRevisits(camera_frame, &fresh, &known) : std::vector<RevisitMatch>{};
+  std::vector<RevisitMatch> revisits;
+  if (config_.map.enabled) {
+    revisits = confirmRevisits(pending, &fresh, &known, &r.revisits_rejected);
+    for (RevisitMatch& m : findRevisits(camera_frame, &fresh, &known)) revisits.push_back(m);
+  }
   updateSeenMoving(r);
   const bool defer =
       config_.zero_velocity.enabled && config_.zero_velocity.defer_landmarks && !seen_moving_ && !at_rest;
@@ -595,6 +602,7 @@ std::vector<RevisitMatch> EkfSlam::findRevisits(const CameraFrame& frame, std::v
   // where the filter predicts them.
   std::unordered_set<std::int64_t> observed;
   for (const auto& f : *known) observed.insert(f.id);
+  for (const auto& [track, q] : pending_) observed.insert(q.landmark_id);  // one match at a time
   std::vector<RevisitCandidate> candidates;
   const Vec3 omega_b = last_gyro_ - state_.x.b_g;
   for (int i = 0; i < state_.numLandmarks(); ++i) {
@@ -656,8 +664,9 @@ std::vector<RevisitMatch> EkfSlam::findRevisits(const CameraFrame& frame, std::v
     proposals.erase(proposals.begin() + static_cast<std::ptrdiff_t>(worst));
   }
   if (static_cast<int>(proposals.size()) < config_.map.min_joint_revisits) return matches;
-  // The agreeing matches observe their landmarks under their ids; a searched corner becomes a
-  // track of the front end, which observes the landmark from then on.
+  // The agreeing matches observe their landmarks under their ids (or, with revisit_confirm_frames
+  // > 1, are pending until their tracks have agreed that long); a searched corner becomes a track
+  // of the front end, which observes the landmark from then on.
   for (const auto& q : proposals) {
     RevisitMatch m = q.match;
     if (q.searched) {
@@ -665,11 +674,51 @@ std::vector<RevisitMatch> EkfSlam::findRevisits(const CameraFrame& frame, std::v
     } else {
       fresh->erase(std::find_if(fresh->begin(), fresh->end(), [&](const auto& o) { return o.id == q.obs.id; }));
     }
+    if (config_.map.revisit_confirm_frames > 1) {
+      const auto c = std::find_if(candidates.begin(), candidates.end(),
+                                  [&](const auto& x) { return x.landmark_id == m.landmark_id; });
+      pending_[m.track_id] = {m.landmark_id, m.distance, 1, q.obs.uv - c->uv, state_.timestamp};
+      continue;
+    }
     known->push_back(q.obs);
     known->back().id = m.landmark_id;
     matches.push_back(m);
   }
   return matches;
+}
+
+std::vector<RevisitMatch> EkfSlam::confirmRevisits(const std::vector<FeatureObservation>& pending,
+                                                   std::vector<FeatureObservation>* fresh,
+                                                   std::vector<FeatureObservation>* known, int* refused) {
+  std::vector<RevisitMatch> confirmed;
+  std::unordered_set<std::int64_t> observed;
+  for (const auto& f : *known) observed.insert(f.id);
+  // (The search's gate at least: a match at the edge of the update's narrow gate is no look-alike.)
+  const double gate_probability =
+      std::max(config_.map.search_gate_probability, outlier_watch_.gateProbability(config_.update));
+  const Vec3 omega_b = last_gyro_ - state_.x.b_g;
+  for (const auto& f : pending) {
+    PendingRevisit& q = pending_.at(f.id);
+    const std::optional<int> i = state_.findLandmark(q.landmark_id);
+    std::optional<PredictedPixel> p;
+    if (i && !observed.count(q.landmark_id))
+      p = predictWithCovariance(state_, *i, camera_, state_.x.T_b_c, config_.update, omega_b);
+    if (!p || !pendingRevisitAgrees(f.uv - p->uv, p->S, q.first_innovation, gate_probability,
+                                    config_.update.pixel_noise_px, config_.map)) {
+      revisiting_[f.id] = kNotRevisit;  // a new point from now on
+      pending_.erase(f.id);
+      fresh->push_back(f);
+      ++*refused;
+      continue;
+    }
+    if (++q.frames < config_.map.revisit_confirm_frames) continue;
+    confirmed.push_back({f.id, q.landmark_id, q.distance});
+    observed.insert(q.landmark_id);
+    known->push_back(f);
+    known->back().id = q.landmark_id;
+    pending_.erase(f.id);
+  }
+  return confirmed;
 }
 
 std::pair<Vec3, double> EkfSlam::landmarkPositionVariance(int i) const {
@@ -694,12 +743,18 @@ void EkfSlam::rememberAppearance(const std::vector<FeatureObservation>& observed
 }
 
 void EkfSlam::forgetEndedRevisits(const CameraFrame& frame, const std::vector<RevisitMatch>& started) {
-  if (revisiting_.empty()) return;
+  if (revisiting_.empty() && pending_.empty()) return;
   std::unordered_set<std::int64_t> live;
   for (const auto& f : frame.features) live.insert(f.id);
   for (const auto& m : started) live.insert(m.track_id);  // adopted in this image: seen from the next on
   for (auto it = revisiting_.begin(); it != revisiting_.end();)
     it = live.count(it->first) ? std::next(it) : revisiting_.erase(it);
+  for (auto it = pending_.begin(); it != pending_.end();) {
+    // (A corner adopted in this image is tracked from the next.)
+    if (!(live.count(it->first) || it->second.found_t == state_.timestamp))
+      std::fprintf(stderr, "ENDED frames=%d\n", it->second.frames);
+    it = live.count(it->first) || it->second.found_t == state_.timestamp ? std::next(it) : pending_.erase(it);
+  }
 }
 
 std::vector<MapPoint> EkfSlam::mapPoints() const {
@@ -739,6 +794,7 @@ void EkfSlam::forgetMap() {
   latest_descriptors_.clear();
   dormant_.clear();
   revisiting_.clear();
+  pending_.clear();
 }
 
 std::vector<std::int64_t> EkfSlam::addLandmarks(const std::vector<FeatureObservation>& fresh, double t) {

@@ -67,6 +67,7 @@ std::string EkfSlamConfig::validate() const {
   checkRange(err, "map_dormant_spacing_m", map.dormant_spacing_m);
   checkRange(err, "map_max_relative_sigma", map.max_relative_sigma);
   checkRange(err, "map_min_joint_revisits", map.min_joint_revisits);
+  checkRange(err, "map_revisit_confirm_frames", map.revisit_confirm_frames);
   checkRange(err, "map_descriptor_ratio", map.descriptor_ratio);
   checkRange(err, "map_search_gate_probability", map.search_gate_probability);
   checkRange(err, "map_max_search_sigma_px", map.max_search_sigma_px);

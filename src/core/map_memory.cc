@@ -1,5 +1,6 @@
 #include "vi_ekf_slam/core/map_memory.h"
 
+#include <Eigen/Cholesky>
 #include <Eigen/Eigenvalues>
 #include <bitset>
 #include <limits>
@@ -12,6 +13,16 @@ int hammingDistance(const Descriptor& a, const Descriptor& b) {
   int d = 0;
   for (size_t i = 0; i < a.size(); ++i) d += static_cast<int>(std::bitset<8>(a[i] ^ b[i]).count());
   return d;
+}
+
+bool pendingRevisitAgrees(const Eigen::Vector2d& e, const Eigen::Matrix2d& S, const Eigen::Vector2d& first_e,
+                          double gate_probability, double pixel_noise_px, const MapMemoryParams& params) {
+  const Eigen::LLT<Eigen::Matrix2d> llt(S);  // (fails on a covariance that is not positive definite)
+  if (llt.info() != Eigen::Success || !e.allFinite() || !first_e.allFinite()) return false;
+  const double nis = e.dot(llt.solve(e));
+  const double drift = (e - first_e).squaredNorm() / (2.0 * pixel_noise_px * pixel_noise_px);
+  return nis <= chiSquaredQuantile(gate_probability, 2.0) &&
+         drift <= chiSquaredQuantile(params.search_gate_probability, 2.0);
 }
 
 std::vector<RevisitMatch> matchRevisits(const std::vector<RevisitCandidate>& candidates,

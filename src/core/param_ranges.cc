@@ -37,6 +37,7 @@ const std::map<std::string, ParamRange>& table() {
       {"map_dormant_spacing_m", {0.05, 100.0}},
       {"map_max_relative_sigma", {0.001, 10.0}},
       {"map_min_joint_revisits", {1, 100}},
+      {"map_revisit_confirm_frames", {1, 100}},
       {"map_descriptor_ratio", {0.1, 1.0}},
       {"map_search_gate_probability", {0.5, 0.999999}},
       {"map_max_search_sigma_px", {1.0, 1000.0}},

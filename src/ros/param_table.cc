@@ -230,6 +230,11 @@ std::vector<ParamSpec> makeTable() {
             "the matches to dormant landmarks of one image must agree on one pose error (joint chi^2 gate); fewer "
             "than this many agreeing matches are none",
             dyn),
+      field("map_revisit_confirm_frames", "map", VI_FIELD(p.filter.map.revisit_confirm_frames), "count",
+            "a match to a dormant landmark is believed once its track has landed where the landmark is predicted "
+            "in this many images (the first included; 1: at once): a look-alike at another depth drifts off, but "
+            "waiting also loses true revisits whose corners the tracker drops",
+            dyn),
       field("map_dormant_spacing_m", "map", VI_FIELD(p.filter.map.dormant_spacing_m), "m",
             "dormant landmarks are counted in cells of this size; the fullest cell gives up its least certain first",
             dyn),

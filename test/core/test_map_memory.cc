@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include "test_helpers.h"
+#include "vi_ekf_slam/core/chi_squared.h"
 #include "vi_ekf_slam/core/ekf_update.h"
 #include "vi_ekf_slam/core/map_memory.h"
 
@@ -119,4 +120,27 @@ TEST(MapMemory, TheSearchRegionIsTheUpdatesInnovationCovariance) {
     ++checked;
   }
   EXPECT_GT(checked, 0);
+}
+
+TEST(MapMemory, APendingMatchAgreesWhileItsTrackStaysOnThePrediction) {
+  // A match is believed only after its track has gone on landing where the landmark is predicted
+  // (revisit_confirm_frames). S: a 1.5 px prediction, 1 px pixel noise, the update's 0.95 gate.
+  const MapMemoryParams p;
+  const Eigen::Matrix2d S = 1.5 * 1.5 * Eigen::Matrix2d::Identity();
+  const Eigen::Vector2d first(2.0, -1.5);  // the filter's error of the moment: 1.7 sigma
+  // The true point keeps that error, with pixel noise: it agrees.
+  EXPECT_TRUE(pendingRevisitAgrees(first + Eigen::Vector2d(0.8, 0.6), S, first, 0.95, 1.0, p));
+  // A look-alike at another depth drifts off: 4.5 px from where it was matched, though still
+  // inside the update's gate: refused by its drift.
+  const Eigen::Vector2d drifted(-2.5, -1.5);
+  ASSERT_LT(drifted.squaredNorm() / S(0, 0), chiSquaredQuantile(0.95, 2.0));
+  EXPECT_FALSE(pendingRevisitAgrees(drifted, S, first, 0.95, 1.0, p));
+  // A track that stays put but outside the update's gate is refused too.
+  EXPECT_FALSE(pendingRevisitAgrees(Eigen::Vector2d(4.0, 1.0), S, Eigen::Vector2d(4.0, 1.0), 0.95, 1.0, p));
+  // A wider gate (the outlier watch's clean gate) takes that offset; the drift bound does not move.
+  EXPECT_TRUE(pendingRevisitAgrees(Eigen::Vector2d(4.0, 1.0), S, Eigen::Vector2d(4.0, 1.0), 0.9999, 1.0, p));
+  EXPECT_FALSE(pendingRevisitAgrees(drifted, S, first, 0.9999, 1.0, p));
+  // A degenerate prediction or a non-finite pixel never agrees.
+  EXPECT_FALSE(pendingRevisitAgrees(first, Eigen::Matrix2d::Zero(), first, 0.95, 1.0, p));
+  EXPECT_FALSE(pendingRevisitAgrees(Eigen::Vector2d(NAN, 0.0), S, first, 0.95, 1.0, p));
 }

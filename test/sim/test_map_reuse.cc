@@ -2,7 +2,7 @@
 // whose tracks ended are found again on the way back, none of them is another point (the
 // simulator knows), also where the texture repeats, and the filter stays consistent. Weakening
 // the search (no ratio test, no joint compatibility, regions far wider than the filter's
-// uncertainty, a loose descriptor bound) lets false closures through, which shows the
+// uncertainty, a loose descriptor bound, matches believed at once) lets false closures through, which shows the
 // repeated-texture test can fail.
 #include <gtest/gtest.h>
 
@@ -60,6 +60,15 @@ TEST(MapReuse, TheCorridorWalkedBackFindsItsLandmarksAgain) {
   EXPECT_EQ(forgot.revisits, 0);
   EXPECT_LT(kept.sum.revisit_error_ratio, forgot.sum.revisit_error_ratio);
   EXPECT_LT(kept.sum.nees_pose, kept.sum.pose_band.hi);
+  // Matches believed only after their tracks stayed on the prediction for 5 images: found again
+  // too, later (the revisits are counted when believed), and still none false.
+  const Outcome confirmed = run(sc, [](EkfSlamConfig& c) {
+    c.map.enabled = true;
+    c.map.revisit_confirm_frames = 5;
+  });
+  EXPECT_GE(confirmed.revisits, 2 * kRuns);
+  EXPECT_EQ(confirmed.false_revisits, 0);
+  EXPECT_LT(confirmed.sum.revisit_error_ratio, forgot.sum.revisit_error_ratio);
 }
 
 TEST(MapReuse, RepeatedTextureClosesNoFalseLoop) {
@@ -76,6 +85,7 @@ TEST(MapReuse, RepeatedTextureClosesNoFalseLoop) {
     c.map.max_search_sigma_px = 1000.0;
     c.map.min_joint_revisits = 1;
     c.map.max_descriptor_distance = 128;
+    c.map.revisit_confirm_frames = 1;
   });
   EXPECT_GT(weak.false_revisits, 0);
 }

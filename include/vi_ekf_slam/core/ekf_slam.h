@@ -207,6 +207,24 @@ class EkfSlam {
   /// update's gate, it is a new point (a track is matched once).
   std::unordered_map<std::int64_t, std::int64_t> revisiting_;
   static constexpr std::int64_t kNotRevisit = -1;
+  /// A match not yet believed: its track must go on landing where the filter predicts the landmark
+  /// for map.revisit_confirm_frames images (a look-alike at another depth drifts off the
+  /// prediction as the camera moves: its innovation changes beyond pixel noise, while the true
+  /// point's keeps the filter's error of the moment). Until then the track observes nothing.
+  struct PendingRevisit {
+    std::int64_t landmark_id = 0;
+    int distance = 0;                                            ///< of the match [bits]
+    int frames = 0;                                              ///< images it has agreed in
+    Eigen::Vector2d first_innovation = Eigen::Vector2d::Zero();  ///< in the image it was found in [px]
+    double found_t = 0.0;                                        ///< that image's time [s]
+  };
+  std::unordered_map<std::int64_t, PendingRevisit> pending_;  ///< by track id
+  /// The pending matches' features of this image: each agreeing one counts an image, one that
+  /// has agreed long enough moves to *known under its landmark's id (returned), one that does not
+  /// agree is a new point (into *fresh, counted in *refused).
+  std::vector<RevisitMatch> confirmRevisits(const std::vector<FeatureObservation>& pending,
+                                            std::vector<FeatureObservation>* fresh,
+                                            std::vector<FeatureObservation>* known, int* refused);
   /// Landmarks being tracked (clones included, dormant ones not).
   int trackedLandmarks() const { return state_.numLandmarks() - static_cast<int>(dormant_.size()); }
   /// The features of tracks that found a landmark again, under that landmark's id; new matches

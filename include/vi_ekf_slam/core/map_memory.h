@@ -25,6 +25,12 @@ struct MapMemoryParams {
   /// The matches of one image must agree (joint compatibility of their stacked innovation at the
   /// update's gate probability); fewer than this many agreeing matches are none [count].
   int min_joint_revisits = 2;
+  /// A match is believed only after its track has landed where the landmark is predicted in this
+  /// many images, the one it was found in included (pendingRevisitAgrees); 1: at once. A
+  /// look-alike at another depth drifts off as the camera moves; a real front end loses many
+  /// corners it found again within an image or two, so waiting also loses true revisits
+  /// (docs/evaluation.md has both) [count].
+  int revisit_confirm_frames = 1;
   /// Only a landmark whose position's std-dev is at most this fraction of its distance is kept
   /// as dormant and searched for: a point whose depth the images have not settled would be found
   /// again in the wrong place [ratio].
@@ -73,6 +79,14 @@ struct RevisitMatch {
   std::int64_t landmark_id = 0;
   int distance = 0;  ///< [bits]
 };
+
+/// A pending match (revisit_confirm_frames) in a later image: its track's innovation against the
+/// landmark's prediction `e` (covariance S) must pass the update's gate (probability
+/// gate_probability), and its drift since the image of the match, e - first_e, must stay within
+/// the search gate of two pixel noises: the true point keeps the filter's error of the moment, a
+/// look-alike at another depth drifts off as the camera moves.
+bool pendingRevisitAgrees(const Eigen::Vector2d& e, const Eigen::Matrix2d& S, const Eigen::Vector2d& first_e,
+                          double gate_probability, double pixel_noise_px, const MapMemoryParams& params);
 
 /// The features (with descriptors) that are landmarks of `candidates` seen again: inside the
 /// landmark's search region, within max_descriptor_distance, the mutual best, and passing the
