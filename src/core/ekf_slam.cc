@@ -751,8 +751,6 @@ void EkfSlam::forgetEndedRevisits(const CameraFrame& frame, const std::vector<Re
     it = live.count(it->first) ? std::next(it) : revisiting_.erase(it);
   for (auto it = pending_.begin(); it != pending_.end();) {
     // (A corner adopted in this image is tracked from the next.)
-    if (!(live.count(it->first) || it->second.found_t == state_.timestamp))
-      std::fprintf(stderr, "ENDED frames=%d\n", it->second.frames);
     it = live.count(it->first) || it->second.found_t == state_.timestamp ? std::next(it) : pending_.erase(it);
   }
 }
