@@ -161,17 +161,22 @@ bench: build $(BAG) $(if $(wildcard $(DATA_DIR)/dmvio_handheld/mav0),results/bag
 # The suite (docs/evaluation.md): the study with the same seeds over the built-in walk, every
 # trajectory in DATA_DIR/trajectories (120 s windows) and the simulator's generated walks; one
 # table per case and configuration plus the worst case of each configuration; SEED=1,2,3: each seed
-# in SUITE_OUT/seed_N and the worst over all seeds in SUITE_OUT/suite_seeds.md.
+# in SUITE_OUT/seed_N and the worst over all seeds in SUITE_OUT/suite_seeds.md. Then the map's
+# walks (there and back, laps; unique and tiled texture), the map kept and forgotten:
+# SUITE_OUT/map/suite_map.md (SUITE_MAP=no skips them, SUITE_MAP=only runs only them).
 #   make suite [SUITE_RUNS=8] [SEED=1] [SUITE_CONFIGS=a,b] [SUITE_OUT=results/suite] [STUDY_ARGS=...]
 #              [SUITE_WALKS=kind,..|all]  (vi_ekf_slam_make_walks kinds; all: with the probe walks)
+#              [SUITE_MAP=no|only]
 SUITE_RUNS    ?= 8
 SUITE_OUT     ?= results/suite
 SUITE_CONFIGS ?=
 SUITE_WALKS   ?=
+SUITE_MAP     ?=
 suite: build
 	python3 tools/suite.py --study $(BIN)/vi_ekf_slam_study --data $(DATA_DIR) --out $(SUITE_OUT) --runs $(SUITE_RUNS) \
 	  --seed $(SEED) --threads $(JOBS) $(if $(SUITE_CONFIGS),--configs $(SUITE_CONFIGS)) \
-	  $(if $(SUITE_WALKS),--walks $(SUITE_WALKS)) $(if $(STUDY_ARGS),-- $(STUDY_ARGS))
+	  $(if $(SUITE_WALKS),--walks $(SUITE_WALKS)) $(if $(filter no,$(SUITE_MAP)),--no-map) \
+	  $(if $(filter only,$(SUITE_MAP)),--map-only) $(if $(STUDY_ARGS),-- $(STUDY_ARGS))
 
 # Starting mid-walk (docs/initialization.md): on the built-in walk, every trajectory in
 # DATA_DIR/trajectories and the simulator's generated walks, the study from 5 random start times

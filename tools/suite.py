@@ -5,7 +5,9 @@ table per trajectory and configuration, with a worst-case row per configuration.
 Cases: the built-in hallway walk; the TUM corridor, UDel ARL and EuRoC V1_01 (the non-pedestrian
 check) from DATA_DIR/trajectories, each in 120 s windows; and the simulator's generated walks
 (a slow start, a crawl, stands, stairs, a fast walk, a stairwell; --walks chooses others, or all of
-its kinds). Any other *.txt in DATA_DIR/trajectories joins the suite with one window from its
+its kinds). Then the map's walks (there and back, laps; every landmark unlike the others, and a
+tiled floor), each with the map kept and forgotten: OUT/map/suite_map.md (--no-map skips them,
+--map-only runs only them). Any other *.txt in DATA_DIR/trajectories joins the suite with one window from its
 start, so the command runs unchanged on trajectories added there.
 
   suite.py --study BIN [--data DIR] [--out results/suite] [--runs 8] [--seed 1 | --seed 1,2,3]
@@ -147,6 +149,65 @@ def run_cases(a, seed, out_dir, walks, configs):
     return rows, band
 
 
+# The map's walks (issue "keep the map", docs/evaluation.md): walks that come back to where they
+# have been, with every landmark looking different and with a tiled floor (one pattern for all),
+# each with the map kept and forgotten (the node's default configuration otherwise).
+MAP_WALKS = ["there_and_back", "laps"]
+MAP_TEXTURES = [("unique", 0), ("tiled", 1)]
+MAP_COLUMNS = [("ate_posyaw_keep_m", "ATE posyaw kept [m]", 3), ("ate_posyaw_forget_m", "forgotten [m]", 3),
+               ("ate_keep_over_forget", "kept / forgotten", 2), ("return_keep", "error on return / first, kept", 2),
+               ("return_forget", "forgotten", 2), ("revisits_per_run", "revisits / run", 1),
+               ("false_revisits", "false revisits", 0), ("nees_pose_keep", "NEES pose kept", 2),
+               ("nees_inside_band", "inside band", 0), ("consistent_keep", "consistent kept", 2),
+               ("filter_ms_keep", "filter kept [ms]", 2), ("filter_ms_forget", "forgotten [ms]", 2)]
+
+
+def run_map_cases(a, seed, out_dir):
+    """The map's walks with one seed, the map kept and forgotten: OUT_DIR/map/<walk>_<texture>_<keep|forget>/,
+    OUT_DIR/map/suite_map.{json,md}; returns the rows (None for a case the study could not run)."""
+    root = os.path.join(out_dir, "map")
+    walks = os.path.join(root, "walks")
+    if subprocess.run([a.make_walks, "--out", walks, "--kinds", ",".join(MAP_WALKS)], stdout=subprocess.DEVNULL).returncode:
+        sys.exit("suite: %s could not write the map's walks (above)" % a.make_walks)
+    rows, band, failed = {}, None, []
+    for walk in MAP_WALKS:
+        for texture, patterns in MAP_TEXTURES:
+            m = {}
+            for mode in ("keep", "forget"):
+                out = os.path.join(root, "%s_%s_%s" % (walk, texture, mode))
+                cmd = [a.study, "--trajectory", os.path.join(walks, walk + ".txt"), "--runs", str(a.runs), "--seed",
+                       str(seed), "--configs", "default", "--threads", str(a.threads), "--map", mode,
+                       "--texture-patterns", str(patterns), "--out", out] + a.extra
+                proc = subprocess.run(cmd, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+                if proc.returncode != 0:
+                    sys.stderr.write(proc.stdout[-2000:] + proc.stderr[-2000:])
+                    m = None
+                    break
+                r = report.load(os.path.join(out, "summary.json"))
+                band = r["config"]["pose_nees_band"]
+                m[mode] = r["runs"]["default"]
+            name = "%s, %s" % (walk, texture)
+            if m is None:
+                failed.append(name)
+                print("  %-34s FAILED" % name, flush=True)
+                continue
+            k, f = m["keep"], m["forget"]
+            rows[name] = {
+                "ate_posyaw_keep_m": k["ate_posyaw_m"], "ate_posyaw_forget_m": f["ate_posyaw_m"],
+                "ate_keep_over_forget": k["ate_posyaw_m"] / f["ate_posyaw_m"] if f["ate_posyaw_m"] else None,
+                "return_keep": k["revisit_error_ratio"], "return_forget": f["revisit_error_ratio"],
+                "revisits_per_run": k["revisits_per_run"], "false_revisits": k["false_revisits"],
+                "nees_pose_keep": k["nees_pose"],
+                "nees_inside_band": k["nees_pose"] is not None and band[0] <= k["nees_pose"] <= band[1],
+                "consistent_keep": k["consistent_fraction"], "filter_ms_keep": k["filter_ms_mean"],
+                "filter_ms_forget": f["filter_ms_mean"]}
+            print("  %-34s done" % name, flush=True)
+    r = report.report("suite_map", "The map's walks: %d runs each, seed %d, the map kept and forgotten" % (a.runs, seed),
+                      {"runs": a.runs, "seed": seed, "pose_nees_band": band, "failed": failed}, rows)
+    print(report.write_report(root, "suite_map", r, columns=MAP_COLUMNS))
+    return rows, failed
+
+
 def row_columns(rows):
     """The suite table's columns (with the reason of a case the study could not run, if any)."""
     cols = [("ate_m", "ATE [m]", 3), ("ate_posyaw_m", "ATE posyaw [m]", 3), ("nees_pose", "NEES pose", 2),
@@ -186,29 +247,41 @@ def main():
     ap.add_argument("--configs", default="", help="configurations (default: the study's suite set)")
     ap.add_argument("--walks", default="", help="generated walk kinds (vi_ekf_slam_make_walks), comma-separated, or all (default: the suite's)")
     ap.add_argument("--threads", type=int, default=os.cpu_count() or 1)
+    ap.add_argument("--no-map", action="store_true",
+                    help="skip the map's walks (there and back, laps; unique and tiled texture; kept and forgotten)")
+    ap.add_argument("--map-only", action="store_true", help="only the map's walks")
     ap.add_argument("extra", nargs="*", help="more options for every study call (after --)")
     a = resolve_tools(ap.parse_args())
     try:
         seeds = [int(x) for x in a.seed.split(",")]
     except ValueError:
         sys.exit("suite: --seed takes integers, comma-separated")
+    t_start = time.time()
 
+    if a.map_only:
+        failed = []
+        for seed in seeds:
+            failed += run_map_cases(a, seed, a.out if len(seeds) == 1 else os.path.join(a.out, "seed_%d" % seed))[1]
+        print("suite: the map's walks, %.1f min" % ((time.time() - t_start) / 60))
+        sys.exit("suite: the study failed on some cases (the tables say which)" if failed else 0)
     walks = write_walks(a.make_walks, a.out, a.walks)
     configs = a.configs.split(",") if a.configs else configs_in(a.study, "suite")
-    t_start = time.time()
     if len(seeds) == 1:
         rows, _ = run_cases(a, seeds[0], a.out, walks, configs)
+        _, map_failed = run_map_cases(a, seeds[0], a.out) if not a.no_map else ({}, [])
         print("suite: %.1f min, written to %s" % ((time.time() - t_start) / 60, a.out))
-        if any_failed(rows):
-            sys.exit("suite: the study failed on some cases (the table says which)")
+        if any_failed(rows) or map_failed:
+            sys.exit("suite: the study failed on some cases (the tables say which)")
         return
 
     # Several seeds: each as above in its own folder, then per case and configuration the pose NEES
     # (consistent fraction) of every seed, and the worst case over all cases and seeds.
-    per_seed = {}
+    per_seed, map_failed = {}, []
     for seed in seeds:
         rows, band = run_cases(a, seed, os.path.join(a.out, "seed_%d" % seed), walks, configs)
         per_seed[seed] = {(r["case"], r["config"]): r for r in rows}
+        if not a.no_map:
+            map_failed += run_map_cases(a, seed, os.path.join(a.out, "seed_%d" % seed))[1]
     worst = {c: new_worst() for c in configs}
     runs = {}
     for key in per_seed[seeds[0]]:
@@ -230,8 +303,8 @@ def main():
         headings={"worst": "Worst case over every case and seed (outside the band: counted once per seed)"})
     print(text)
     print("suite: %.1f min, written to %s (seed_N/ per seed, suite_seeds.md)" % ((time.time() - t_start) / 60, a.out))
-    if any(any_failed(per_seed[s].values()) for s in seeds):
-        sys.exit("suite: the study failed on some cases (the table says which)")
+    if any(any_failed(per_seed[s].values()) for s in seeds) or map_failed:
+        sys.exit("suite: the study failed on some cases (the tables say which)")
 
 
 if __name__ == "__main__":

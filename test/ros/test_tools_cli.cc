@@ -192,7 +192,8 @@ done
 case "$traj" in *broken*) echo "error: $traj:2: time does not increase" >&2; exit 1;; esac
 mkdir -p "$out"
 echo '{"schema": "vi_ekf_slam.report/1", "tool": "study", "title": "stand-in", "config": {"pose_nees_band": [3.84, 8.63]},
- "runs": {"default": {"ate_position_m": 0.2, "ate_posyaw_m": 0.1, "nees_pose": 6.1, "consistent_fraction": 0.97}}}' > "$out/summary.json"
+ "runs": {"default": {"ate_position_m": 0.2, "ate_posyaw_m": 0.1, "nees_pose": 6.1, "consistent_fraction": 0.97,
+  "revisit_error_ratio": 1.5, "revisits_per_run": 12.0, "false_revisits": 0, "filter_ms_mean": 2.0}}}' > "$out/summary.json"
 )";
   ASSERT_EQ(run("chmod +x " + dir + "/study.sh").code, 0);
   const std::string suite = "python3 " + std::string(VI_EKF_SLAM_SOURCE_DIR) + "/tools/suite.py --study " + dir +
@@ -209,6 +210,11 @@ echo '{"schema": "vi_ekf_slam.report/1", "tool": "study", "title": "stand-in", "
   // The worst case counts it as failed, not as a NEES.
   EXPECT_NE(o.output.find("| default | 6.10 | 0 | 0.97 | - | 1 |"), std::string::npos) << o.output;
   EXPECT_TRUE(std::ifstream(dir + "/out/suite.md").good());
+  // The map's walks, each kept and forgotten (the stand-in gives both the same).
+  EXPECT_NE(o.output.find("| laps, tiled | 0.100 | 0.100 | 1.00 | 1.50 | 1.50 | 12.0 | 0 | 6.10 | yes | 0.97 |"),
+            std::string::npos)
+      << o.output;
+  EXPECT_TRUE(std::ifstream(dir + "/out/map/suite_map.md").good());
   // The suite's report in the tools' one schema, its cases and worst case as tables.
   const nlohmann::json suite_json = nlohmann::json::parse(std::ifstream(dir + "/out/suite.json"));
   EXPECT_EQ(suite_json["schema"], "vi_ekf_slam.report/1");
