@@ -81,10 +81,10 @@ struct RevisitMatch {
 };
 
 /// A pending match (revisit_confirm_frames) in a later image: its track's innovation against the
-/// landmark's prediction `e` (covariance S) must pass the update's gate (probability
-/// gate_probability), and its drift since the image of the match, e - first_e, must stay within
-/// the search gate of two pixel noises: the true point keeps the filter's error of the moment, a
-/// look-alike at another depth drifts off as the camera moves.
+/// landmark's prediction `e` (covariance S) must pass the chi^2 gate of probability
+/// gate_probability (the caller's: EkfSlam uses the wider of the update's and the search's), and its drift since the
+/// image of the match, e - first_e, must stay within the search gate of two pixel noises: the true point keeps the
+/// filter's error of the moment, a look-alike at another depth drifts off as the camera moves.
 bool pendingRevisitAgrees(const Eigen::Vector2d& e, const Eigen::Matrix2d& S, const Eigen::Vector2d& first_e,
                           double gate_probability, double pixel_noise_px, const MapMemoryParams& params);
 
