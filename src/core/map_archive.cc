@@ -23,9 +23,6 @@ cv::Mat descriptorRows(const std::vector<Descriptor>& d) {
   return m;
 }
 
-/// The least-squares rotation about z of R (its horizontal part), as an angle [rad].
-double yawOf(const Mat3& R) { return std::atan2(R(1, 0) - R(0, 1), R(0, 0) + R(1, 1)); }
-
 }  // namespace
 
 void MapArchive::setMaxPoints(int max_points) {
@@ -243,8 +240,8 @@ std::optional<Relocalization> relocalize(const MapArchive& map, const std::vecto
     return none("PnP camera tilted " + std::to_string(out.tilt_deg) + " deg from the filter's gravity");
   }
   // Both worlds are gravity-aligned: the PnP's yaw and the body's position, the filter's roll and pitch.
-  out.T_m_n.linear() = Eigen::AngleAxisd(yawOf(T_m_n_full.linear()), Eigen::Vector3d::UnitZ()).toRotationMatrix();
-  out.T_m_n.translation() = T_m_b.translation() - out.T_m_n.linear() * T_n_b.translation();
+  out.T_m_n =
+      registrationAtFirstPose(T_n_b.translation(), Quat(T_n_b.linear()), T_m_b.translation(), Quat(T_m_b.linear()));
   return out;
 }
 

@@ -59,7 +59,7 @@ bool VioPipeline::setConfig(const EkfSlamConfig& config, std::string* error) {
 void VioPipeline::startedMapRun() { in_map_ = map_.empty(); }
 
 void VioPipeline::archiveRun() {
-  if (keepsMapAcrossRuns() && filter_ && filter_->initialized() && in_map_) map_.merge(filter_->mapPoints());
+  if (config_.map.keptAcrossRuns() && filter_ && filter_->initialized() && in_map_) map_.merge(filter_->mapPoints());
   in_map_ = false;
 }
 
@@ -283,8 +283,9 @@ void VioPipeline::process(QueuedFrame& f) {
   FrameResult r = filter_->processFrame(features);
   std::optional<NavState> nav;
   // The map kept across resets: the points leaving a filter that is in it, or placing one that is not.
-  if (r.processed && r.lost.empty() && keepsMapAcrossRuns() && in_map_) map_.merge(r.left_the_state);
-  if (r.processed && r.lost.empty() && keepsMapAcrossRuns() && !in_map_ && !map_.empty()) tryRelocalize(features);
+  if (r.processed && r.lost.empty() && config_.map.keptAcrossRuns() && in_map_) map_.merge(r.left_the_state);
+  if (r.processed && r.lost.empty() && config_.map.keptAcrossRuns() && !in_map_ && !map_.empty())
+    tryRelocalize(features);
   if (r.processed && r.lost.empty()) {
     nav = filter_->navState();
     if (!allFinite(*nav)) r.lost = "the filter state became non-finite";

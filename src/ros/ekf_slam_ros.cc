@@ -9,11 +9,6 @@
 
 namespace vi_ekf_slam::glue {
 
-namespace {
-/// The map outlives resets and can be relocalized in (keep_map with map_relocalize), as started.
-bool keepsMap(const NodeParams& p) { return p.filter.map.enabled && p.filter.map.relocalize; }
-}  // namespace
-
 EkfSlamRos::EkfSlamRos(ros::NodeHandle nh, ros::NodeHandle pnh) : nh_(nh), pnh_(pnh), it_(nh), updater_(nh, pnh) {
   NodeParams params;
   const std::string err = loadParams(NodeHandleParams(pnh_), &params);
@@ -22,7 +17,8 @@ EkfSlamRos::EkfSlamRos(ros::NodeHandle nh, ros::NodeHandle pnh) : nh_(nh), pnh_(
   // TF is read for the camera-IMU extrinsic, for base_frame <- IMU, and to find whether the frame
   // the node moves already has a parent.
   tf_listener_ = std::make_unique<tf2_ros::TransformListener>(tf_buffer_, nh_);
-  if (params.node.publish_tf == TfMode::kOdom && !params.node.map_frame.empty() && !keepsMap(params)) {
+  if (params.node.publish_tf == TfMode::kOdom && !params.node.map_frame.empty() &&
+      !params.filter.map.keptAcrossRuns()) {
     // No global localizer: map and odom coincide (REP-105). With the kept map, map -> odom goes
     // with the odometry (a relocalization moves it).
     geometry_msgs::TransformStamped t;
@@ -150,7 +146,7 @@ void EkfSlamRos::odometry(const nav_msgs::Odometry& odom) {
     t.transform.rotation = odom.pose.pose.orientation;
     tf_broadcaster_.sendTransform(t);
     tf_sent_ = true;
-    if (o.publish_tf == TfMode::kOdom && !o.map_frame.empty() && keepsMap(processor_->params())) {
+    if (o.publish_tf == TfMode::kOdom && !o.map_frame.empty() && processor_->params().filter.map.keptAcrossRuns()) {
       // map_frame -> odom_frame: where the kept map places odom (identity until a relocalization).
       const Eigen::Isometry3d T_m_o = processor_->outputFrames().odomFromMap().inverse();
       geometry_msgs::TransformStamped m = tf2::eigenToTransform(T_m_o);
@@ -278,7 +274,7 @@ void EkfSlamRos::diagnoseFilter(diagnostic_updater::DiagnosticStatusWrapper& sta
   stat.add("lost (divergence resets)", processor_->counters().divergences);
   stat.add("last lost", processor_->lastLost());
   stat.add("last update [ms]", processor_->lastUpdateMs());
-  if (keepsMap(processor_->params())) {
+  if (processor_->params().filter.map.keptAcrossRuns()) {
     const VioPipeline& p = processor_->pipeline();
     stat.add("kept map points", p.map().size());
     stat.add("in the kept map", p.inMap() ? "yes" : "no: not relocalized since the last reset");

@@ -61,6 +61,9 @@ struct MapMemoryParams {
   /// The PnP camera's gravity may differ from the filter's by at most this [deg]: both worlds are
   /// gravity-aligned, a larger tilt is a false relocalization.
   double relocalize_max_tilt_deg = 5.0;
+
+  /// The map outlives the filter's runs (resets, a loaded file) and a new run is placed in it.
+  bool keptAcrossRuns() const { return enabled && relocalize; }
 };
 
 int hammingDistance(const Descriptor& a, const Descriptor& b);

@@ -148,7 +148,6 @@ class VioPipeline {
   void forgetStart();
   /// A filter started: it defines the map if the map is empty, else waits to be placed in it.
   void startedMapRun();
-  bool keepsMapAcrossRuns() const { return config_.map.enabled && config_.map.relocalize; }
   /// Before the filter forgets its run: its points join the map (when its world is the map's).
   void archiveRun();
   /// The filter not in the map yet: this frame's features against the map (PnP); placed on success.
