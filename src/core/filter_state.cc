@@ -190,8 +190,11 @@ void FilterState::boxplus(const Eigen::VectorXd& dx) {
   }
   if (extrinsic_) {
     const int e = extrinsicIndex();
+    const CameraExtrinsics before = x.T_b_c;
     x.T_b_c.p_b_c += dx.segment<3>(e);
     x.T_b_c.R_b_c = (expQuat(dx.segment<3>(e + 3)) * Quat(x.T_b_c.R_b_c)).normalized().toRotationMatrix();
+    // Inverse-depth anchors ride on the extrinsic (landmark.h).
+    for (Landmark& lm : landmarks_) lm = lm.withExtrinsic(before.R_b_c, before.p_b_c, x.T_b_c.R_b_c, x.T_b_c.p_b_c);
   }
   for (int i = 0; i < numLandmarks(); ++i) landmarks_[static_cast<size_t>(i)].l += dx.segment<3>(landmarkIndex(i));
 }
@@ -219,8 +222,15 @@ Eigen::VectorXd FilterState::boxminus(const FilterState& other) const {
   for (int i = 0; i < numLandmarks(); ++i) {
     // Compare the points in the other landmark's parameterization (anchors may differ after a
     // frame change of a perturbed state).
+    // With the extrinsic estimated, this point as it would be under the other's extrinsic (its
+    // anchor rides on it): l's error, not the extrinsic's.
     const Landmark& o = other.landmark(i);
-    e.segment<3>(landmarkIndex(i)) = o.paramsOf(landmark(i).position()) - o.l;
+    const Landmark& mine = landmark(i);
+    const Vec3 p =
+        extrinsic_
+            ? mine.withExtrinsic(x.T_b_c.R_b_c, x.T_b_c.p_b_c, other.x.T_b_c.R_b_c, other.x.T_b_c.p_b_c).position()
+            : mine.position();
+    e.segment<3>(landmarkIndex(i)) = o.paramsOf(p) - o.l;
   }
   return e;
 }

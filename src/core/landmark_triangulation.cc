@@ -23,6 +23,7 @@ CameraClone appendCameraClone(FilterState& state, std::int64_t id, const CameraE
   c.id = id;
   c.t = state.timestamp;
   c.R_s_c = R_s_b * T_b_c.R_b_c;
+  c.R_b_c = T_b_c.R_b_c;
   return c;  // relative to the current camera its orientation is exact (rotation_cov 0)
 }
 
@@ -42,9 +43,10 @@ bool triangulateLandmark(const FilterState& state, const CameraClone& clone, con
   const Vec3 Rp_bc = R_s_b * T_b_c.p_b_c;
   const Vec3 p_s_c = state.x.p_s_b + Rp_bc;
   const Vec3 m1(xn1.x(), xn1.y(), 1.0), m0(xn0.x(), xn0.y(), 1.0);
+  const Mat3 R_s_c0 = clone.R_s_c * clone.R_b_c.transpose() * T_b_c.R_b_c;  // the clone's camera now
   // The point on each ray: p_s_c + a1 d1 = clone + a0 d0, solved for the depths (d1, d0) in the
   // least-squares sense (the rays' closest points).
-  const Vec3 a1 = R_s_c * m1, a0 = clone.R_s_c * m0, b = state.landmark(*ci).l - p_s_c;
+  const Vec3 a1 = R_s_c * m1, a0 = R_s_c0 * m0, b = state.landmark(*ci).l - p_s_c;
   Eigen::Matrix<double, 3, 2> A;
   A << a1, -a0;
   const Eigen::Matrix2d N = A.transpose() * A;
@@ -78,7 +80,7 @@ bool triangulateLandmark(const FilterState& state, const CameraClone& clone, con
   }
   for (int k = 0; k < 2; ++k) {
     direction(9 + k, z, R_s_c * Vec3(J1(0, k), J1(1, k), 0.0), z, z);
-    direction(11 + k, z, z, clone.R_s_c * Vec3(J0(0, k), J0(1, k), 0.0), z);
+    direction(11 + k, z, z, R_s_c0 * Vec3(J0(0, k), J0(1, k), 0.0), z);
   }
 
   // The extrinsic, when estimated: p_b_c moves the current camera (the clone's position is a state
@@ -91,7 +93,7 @@ bool triangulateLandmark(const FilterState& state, const CameraClone& clone, con
     for (int j = 0; j < 3; ++j) {
       const Vec3 e = Vec3::Unit(j);
       direction(j, R_s_b * e, z, z, -(R_s_b * e));
-      direction(3 + j, z, R_s_b * e.cross(T_b_c.R_b_c * m1), clone.R_s_c * (T_b_c.R_b_c.transpose() * e).cross(m0), z);
+      direction(3 + j, z, R_s_b * e.cross(T_b_c.R_b_c * m1), R_s_c0 * (T_b_c.R_b_c.transpose() * e).cross(m0), z);
     }
     J_X_ext = J_X.leftCols<6>();
     J_gap_ext = J_gap.leftCols<6>();
@@ -120,7 +122,13 @@ bool triangulateLandmark(const FilterState& state, const CameraClone& clone, con
     const int e = state.extrinsicIndex();
     const int all[5] = {idx::kP, idx::kPsi, state.landmarkIndex(*ci), e, e + 3};
     const Eigen::Matrix<double, 15, 15> P_xe = gatherBlocks<5>(state.covariance(), all);
-    t.J_ext = D * J_X_ext;
+    // The new point's anchor (the current camera) rides on the extrinsic (landmark.h): l carries
+    // what the anchor does not.
+    Mat3 Y_pbc, Y_thc;
+    t.landmark.extrinsicJacobian(T_b_c.R_b_c, &Y_pbc, &Y_thc);
+    Eigen::Matrix<double, 3, 6> Y_ext;
+    Y_ext << Y_pbc, Y_thc;
+    t.J_ext = D * (J_X_ext - Y_ext);
     Eigen::Matrix<double, 3, 15> J_se;
     J_se << t.J_state, t.J_ext;
     Eigen::Matrix<double, 1, 15> g_se;

@@ -38,6 +38,13 @@ bool predictObservation(const MotionState& x, const Landmark& lm, const CameraMo
     // with R_b_c = Exp(theta) R_b_c, q_c = R_b_c^T (I - [theta]x) R_s_b^T q_s.
     J->H_pbc = J->H_p * R_s_b;
     J->H_thc = J_pi * T_b_c.R_b_c.transpose() * skew(R_s_b.transpose() * q_s);
+    // An inverse-depth anchor rides on the extrinsic (landmark.h): q_s = w (Y - p_s_c) moves with it.
+    if (lm.kind == LandmarkKind::kInverseDepth) {
+      Mat3 Y_pbc, Y_thc;
+      lm.extrinsicJacobian(T_b_c.R_b_c, &Y_pbc, &Y_thc);
+      J->H_pbc += w * JR * Y_pbc;
+      J->H_thc += w * JR * Y_thc;
+    }
   }
   return true;
 }

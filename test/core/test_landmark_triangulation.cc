@@ -392,6 +392,7 @@ TEST(DelayedLandmarks, ATrackWaitsWhileTheBaselineThatMakesItsDepthIsUncertain) 
     CameraClone clone;
     clone.id = s.landmarkIds()[0];
     clone.R_s_c = T.R_b_c;
+    clone.R_b_c = T.R_b_c;
     TriangulatedLandmark l;
     Eigen::Vector2d uv0;
     ASSERT_TRUE(cam.project(point, &uv0));

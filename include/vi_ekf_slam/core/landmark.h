@@ -7,6 +7,12 @@
 //   not a state; the point's correlation with the pose error at initialization is carried by
 //   its cross-covariance, exactly as for a Cartesian point. The map is almost linear in rho, so
 //   a point of unknown depth is a Gaussian in l, unlike a Cartesian point at a guessed depth.
+//   When the state estimates the camera-IMU extrinsic, the anchor is the body pose at the first
+//   view (a constant) composed with the *estimated* extrinsic: the anchor rides on the extrinsic
+//   (FilterState::boxplus moves it), so the ray starts at the camera the extrinsic places. A
+//   constant camera anchor would make l absorb the extrinsic's error scaled by the uncertain rho,
+//   a product the linearized filter drops: it gained centimetres of extrinsic information from
+//   two images a millisecond apart.
 #pragma once
 
 #include "vi_ekf_slam/core/so3.h"
@@ -59,6 +65,33 @@ struct Landmark {
     if (kind == LandmarkKind::kCartesian) return p_s;
     const Vec3 p_a = R_s_a.transpose() * (p_s - p_s_a);
     return Vec3(p_a.x() / p_a.z(), p_a.y() / p_a.z(), 1.0 / p_a.z());
+  }
+
+  /// The point's derivative w.r.t. the extrinsic's errors (p_b_c; theta with R_b_c = Exp(theta)
+  /// R_b_c) at fixed l, the anchor riding on the extrinsic whose estimated rotation is R_b_c. Zero
+  /// for a Cartesian point.
+  void extrinsicJacobian(const Mat3& R_b_c, Mat3* J_pbc, Mat3* J_thc) const {
+    if (kind == LandmarkKind::kCartesian) {
+      J_pbc->setZero();
+      J_thc->setZero();
+      return;
+    }
+    const Mat3 R_s_ab = R_s_a * R_b_c.transpose();  // the anchor body's orientation
+    *J_pbc = R_s_ab;
+    *J_thc = -skew(position() - p_s_a) * R_s_ab;
+  }
+
+  /// The anchor of the same body pose under another extrinsic (from -> to): l is unchanged, so an
+  /// inverse-depth point moves with the camera the new extrinsic places. A Cartesian point is kept.
+  Landmark withExtrinsic(const Mat3& R_b_c_from, const Vec3& p_b_c_from, const Mat3& R_b_c_to,
+                         const Vec3& p_b_c_to) const {
+    Landmark out = *this;
+    if (kind == LandmarkKind::kCartesian) return out;
+    const Mat3 R_s_ab = R_s_a * R_b_c_from.transpose();
+    const Vec3 p_s_ab = p_s_a - R_s_ab * p_b_c_from;
+    out.R_s_a = R_s_ab * R_b_c_to;
+    out.p_s_a = p_s_ab + R_s_ab * p_b_c_to;
+    return out;
   }
 
   /// The same point after the frame change y' = R y + t (l is unchanged for inverse depth,

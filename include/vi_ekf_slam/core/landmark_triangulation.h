@@ -23,8 +23,11 @@ namespace vi_ekf_slam {
 /// The camera at an earlier image: its position is the Cartesian point `id` in the state.
 struct CameraClone {
   std::int64_t id = 0;
-  double t = 0.0;                    ///< when it was taken (state time) [s]
-  Mat3 R_s_c = Mat3::Identity();     ///< its orientation as estimated, in the current {s}
+  double t = 0.0;                 ///< when it was taken (state time) [s]
+  Mat3 R_s_c = Mat3::Identity();  ///< its orientation as estimated, in the current {s}
+  /// The extrinsic's rotation R_s_c was taken with: the clone's body is fixed, its camera turns
+  /// with the extrinsic's estimate (triangulateLandmark uses R_s_c R_b_c^T times the current one).
+  Mat3 R_b_c = Mat3::Identity();
   Mat3 rotation_cov = Mat3::Zero();  ///< variance of R_s_c relative to the current body [rad^2] (global, in {s})
 };
 

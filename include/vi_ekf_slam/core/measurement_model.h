@@ -17,7 +17,9 @@ struct ObservationJacobians {
   Eigen::Matrix<double, 2, 3> H_p;    ///< w.r.t. position error of {b} in {s}
   Eigen::Matrix<double, 2, 3> H_psi;  ///< w.r.t. orientation error psi_s_b
   Eigen::Matrix<double, 2, 3> H_l;    ///< w.r.t. the landmark's three state entries
-  Eigen::Matrix<double, 2, 3> H_pbc;  ///< w.r.t. the camera's position error in {b} (extrinsic)
+  /// w.r.t. the camera's position error in {b} (extrinsic); an inverse-depth anchor moves with it
+  /// (landmark.h), as in a state that estimates the extrinsic
+  Eigen::Matrix<double, 2, 3> H_pbc;
   Eigen::Matrix<double, 2, 3> H_thc;  ///< w.r.t. the camera's rotation error: R_b_c = Exp(theta) R_b_c
 };
 
