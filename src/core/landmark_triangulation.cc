@@ -43,7 +43,9 @@ bool triangulateLandmark(const FilterState& state, const CameraClone& clone, con
   const Vec3 Rp_bc = R_s_b * T_b_c.p_b_c;
   const Vec3 p_s_c = state.x.p_s_b + Rp_bc;
   const Vec3 m1(xn1.x(), xn1.y(), 1.0), m0(xn0.x(), xn0.y(), 1.0);
-  const Mat3 R_s_c0 = clone.R_s_c * clone.R_b_c.transpose() * T_b_c.R_b_c;  // the clone's camera now
+  // The clone's camera now (its body fixed, its camera turned by an estimated extrinsic's change).
+  const Mat3 R_s_c0 =
+      state.estimatesExtrinsic() ? Mat3(clone.R_s_c * clone.R_b_c.transpose() * T_b_c.R_b_c) : clone.R_s_c;
   // The point on each ray: p_s_c + a1 d1 = clone + a0 d0, solved for the depths (d1, d0) in the
   // least-squares sense (the rays' closest points).
   const Vec3 a1 = R_s_c * m1, a0 = R_s_c0 * m0, b = state.landmark(*ci).l - p_s_c;
