@@ -53,7 +53,7 @@ help:
 	@echo "make faults - faulty copies of the real recording and the rendered walk, one fault class at a time -> results/faults"
 	@echo "make extrinsic - the online camera-IMU extrinsic from a calibration 3 deg / 3 cm off, real recording and study -> results/extrinsic"
 	@echo "make bench  - benchmarks (core vs map size, tracker, pipeline) -> results/bench/summary.json"
-	@echo "make soak   - 30 min endurance walk per mechanization (SOAK_MINUTES=) -> results/soak"
+	@echo "make soak   - 30 min endurance walk per mechanization (SOAK_MINUTES=, SOAK_MAP=keep) -> results/soak"
 	@echo "make results - docs/results.md (and the README's quote) from the results of demo, realdata, suite, bench"
 	@echo "make lint   - catkin_lint, clang-format, pyflakes on the Python, clang-tidy on the core (part of make test)"
 	@echo "make clean  - remove the build workspace"
@@ -222,8 +222,9 @@ extrinsic: build $(REAL_BAG)
 # Endurance: a 30-minute walk (laps) per mechanization through the core; error, map size and
 # resident memory over time (a 4-minute version runs in make test).
 SOAK_MINUTES ?= 30
+SOAK_MAP ?= forget
 soak: build
-	$(BIN)/vi_ekf_slam_soak --minutes $(SOAK_MINUTES) --out results/soak
+	$(BIN)/vi_ekf_slam_soak --minutes $(SOAK_MINUTES) --map $(SOAK_MAP) --out results/soak
 	python3 tools/plot_soak.py results/soak --docs docs/img
 
 clean:

@@ -4,6 +4,8 @@
     factor and filter+tracker time per frame;
   - offline on a real 1280x720 recording (--real-bag, the make realdata bag), pinned to one core:
     real-time factor, time per image and its tracking share (from health.json: no ground truth);
+  - the same two with the map kept (keep_map: dormant points fill the state up to its bound): time
+    per frame and what keeping the map adds to it;
   - live: one `rosbag play` replay through the nodelet (tools/demo.py's replay), and the latency
     of every published odometry message: the time the recorder received it minus its stamp (the
     image time). rosbag play drives /clock at 100 Hz, so single values are quantized to 10 ms;
@@ -61,11 +63,19 @@ def main():
     result["offline_ms_per_frame_mean"] = round(s["processing_ms_mean"], 2)
     result["offline_ms_per_frame_p95"] = round(s["processing_ms_p95"], 2)
     result["offline_tracker_ms_per_frame"] = round(s["tracker_ms_mean"], 2)
+    k = offline(a.bag, os.path.join(a.out, "offline_keep_map"), "summary.json",
+                ["--config", a.config, "--param", "keep_map=true"])
+    result["offline_keep_map_ms_per_frame_mean"] = round(k["processing_ms_mean"], 2)
+    result["offline_keep_map_extra_ms_per_frame"] = round(k["processing_ms_mean"] - s["processing_ms_mean"], 2)
     if a.real_bag:
         h = offline(a.real_bag, os.path.join(a.out, "offline_real"), "health.json")
         result["real_1280x720_real_time_factor_1core"] = round(h["real_time_factor"], 2)
         result["real_1280x720_ms_per_image_mean"] = round(h["processing_ms_mean"], 2)
         result["real_1280x720_tracker_ms_per_image"] = round(h["tracker_ms_mean"], 2)
+        hk = offline(a.real_bag, os.path.join(a.out, "offline_real_keep_map"), "health.json",
+                     ["--param", "keep_map=true"])
+        result["real_1280x720_keep_map_ms_per_image_mean"] = round(hk["processing_ms_mean"], 2)
+        result["real_1280x720_keep_map_extra_ms_per_image"] = round(hk["processing_ms_mean"] - h["processing_ms_mean"], 2)
     with open(os.path.join(a.out, "roslaunch.log"), "w") as log:
         rec = replay(os.path.abspath(a.bag), MECH, a.out, os.path.abspath(a.config), False, 1.0, log)
     lat = odom_latency_ms(rec)

@@ -71,17 +71,19 @@ struct FaultRecord {
 int main(int argc, char** argv) {
   tuneAllocatorForLargeBuffers();
   double minutes = 30.0;
-  std::string out = "results/soak", which = "all", faults_arg = "on";
+  std::string out = "results/soak", which = "all", faults_arg = "on", map_arg = "forget";
   std::uint64_t seed = 1;
   const std::string usage =
       "vi_ekf_slam_soak [--minutes 30] [--out results/soak] [--mechanizations all|NAME,...] [--seed 1] "
-      "[--faults on|off]";
+      "[--faults on|off] [--map keep|forget]";
   cli::po::options_description opts("options");
   opts.add_options()("minutes", cli::po::value(&minutes)->default_value(minutes), "walk duration [min]")(
       "out", cli::po::value(&out)->default_value(out), "output folder")(
       "mechanizations", cli::po::value(&which)->default_value(which), "all, or names of mechanizations")(
       "seed", cli::po::value(&seed)->default_value(seed), "random seed")(
-      "faults", cli::po::value(&faults_arg)->default_value(faults_arg), "inject sensor faults: on|off");
+      "faults", cli::po::value(&faults_arg)->default_value(faults_arg), "inject sensor faults: on|off")(
+      "map", cli::po::value(&map_arg)->default_value(map_arg),
+      "keep | forget: landmarks whose tracks ended stay dormant and are found again (keep_map), or go");
   cli::parse(argc, argv, usage,
              "Endurance: a long walk (laps of a block) per mechanization through the core; error, map size and "
              "resident memory over time.",
@@ -89,6 +91,7 @@ int main(int argc, char** argv) {
   if (!(minutes > 0.0)) cli::fail(usage, "--minutes must be > 0");
   if (faults_arg != "on" && faults_arg != "off") cli::fail(usage, "--faults must be on or off");
   const bool faults = faults_arg == "on";
+  if (map_arg != "keep" && map_arg != "forget") cli::fail(usage, "--map must be keep or forget");
   std::vector<Mechanization> mechs;
   for (auto m :
        {Mechanization::kWorldCentric, Mechanization::kSensorCentric, Mechanization::kSensorCentricComposition}) {
@@ -110,6 +113,7 @@ int main(int argc, char** argv) {
   for (Mechanization m : mechs) {
     EkfSlamConfig c;  // the node's defaults: composition every update, inverse depth, 100 landmarks
     c.mechanization = m;
+    c.map.enabled = map_arg == "keep";
     c.imu_noise = sc.imu.noise;
     c.update.pixel_noise_px = sc.cam.pixel_noise_px;
     std::vector<Row> rows;
