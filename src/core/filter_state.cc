@@ -221,9 +221,8 @@ Eigen::VectorXd FilterState::boxminus(const FilterState& other) const {
   }
   for (int i = 0; i < numLandmarks(); ++i) {
     // Compare the points in the other landmark's parameterization (anchors may differ after a
-    // frame change of a perturbed state).
-    // With the extrinsic estimated, this point as it would be under the other's extrinsic (its
-    // anchor rides on it): l's error, not the extrinsic's.
+    // frame change of a perturbed state), this point taken under the other's extrinsic when the
+    // extrinsic is estimated (its anchor rides on it): l's error, not the extrinsic's.
     const Landmark& o = other.landmark(i);
     const Landmark& mine = landmark(i);
     const Vec3 p =

@@ -46,9 +46,8 @@ void appendTransformed(FilterState& state, std::int64_t id, const Landmark& lm, 
     // The ray also starts at the estimated camera: the extrinsic's errors move it. An inverse-depth
     // anchor moves with them (landmark.h), so l carries only what the anchor does not.
     const int e = state.extrinsicIndex();
-    Mat3 Y_pbc, Y_thc;
-    lm.extrinsicJacobian(state.x.T_b_c.R_b_c, &Y_pbc, &Y_thc);
-    const Mat3 DG_pbc = D * (l.G_pbc - Y_pbc), DG_thc = D * (l.G_thc - Y_thc);
+    const Eigen::Matrix<double, 3, 6> Y_ext = lm.extrinsicJacobian(state.x.T_b_c.R_b_c);
+    const Mat3 DG_pbc = D * (l.G_pbc - Y_ext.leftCols<3>()), DG_thc = D * (l.G_thc - Y_ext.rightCols<3>());
     P_l_state.noalias() += DG_pbc * P.middleRows<3>(e);
     P_l_state.noalias() += DG_thc * P.middleRows<3>(e + 3);
     Eigen::Matrix<double, 3, 12> G_xe;
@@ -137,10 +136,9 @@ std::vector<int> initializeLandmarksInverseDepthJointly(FilterState& state, cons
     A.block<3, 3>(3 * a, idx::kP) = D * l.G_p;
     A.block<3, 3>(3 * a, idx::kPsi) = D * l.G_psi;
     if (state.estimatesExtrinsic()) {  // less what the riding anchor carries (landmark.h)
-      Mat3 Y_pbc, Y_thc;
-      lms[static_cast<size_t>(a)].extrinsicJacobian(state.x.T_b_c.R_b_c, &Y_pbc, &Y_thc);
-      A.block<3, 3>(3 * a, state.extrinsicIndex()) = D * (l.G_pbc - Y_pbc);
-      A.block<3, 3>(3 * a, state.extrinsicIndex() + 3) = D * (l.G_thc - Y_thc);
+      const Eigen::Matrix<double, 3, 6> Y_ext = lms[static_cast<size_t>(a)].extrinsicJacobian(state.x.T_b_c.R_b_c);
+      A.block<3, 3>(3 * a, state.extrinsicIndex()) = D * (l.G_pbc - Y_ext.leftCols<3>());
+      A.block<3, 3>(3 * a, state.extrinsicIndex() + 3) = D * (l.G_thc - Y_ext.rightCols<3>());
     }
     A(3 * a + 2, d0 + a) = 1.0;
     const Eigen::Matrix<double, 3, 2> DG_uv = D * l.G_uv;
@@ -183,12 +181,12 @@ double inverseDepthInCamera(const FilterState& state, int i, const CameraExtrins
       // p_s_c = p_s_b + R_s_b p_b_c; R_c_s = R_b_c^T (I - [theta]x) R_s_b^T.
       const int e = state.extrinsicIndex();
       const Vec3 v = p_s_l - state.x.p_s_b - R_s_b * T_b_c.p_b_c;
-      Mat3 Y_pbc, Y_thc;  // an inverse-depth anchor rides on the extrinsic (landmark.h)
-      state.landmark(i).extrinsicJacobian(T_b_c.R_b_c, &Y_pbc, &Y_thc);
-      J->segment<3>(e) = -dz * (R_s_b - Y_pbc);
+      // An inverse-depth anchor rides on the extrinsic (landmark.h).
+      const Eigen::Matrix<double, 3, 6> Y_ext = state.landmark(i).extrinsicJacobian(T_b_c.R_b_c);
+      J->segment<3>(e) = -dz * (R_s_b - Y_ext.leftCols<3>());
       J->segment<3>(e + 3) =
           -(1.0 / (z * z)) * Eigen::RowVector3d(T_b_c.R_b_c.col(2).transpose()) * skew(R_s_b.transpose() * v) +
-          dz * Y_thc;
+          dz * Y_ext.rightCols<3>();
     }
   }
   return 1.0 / z;

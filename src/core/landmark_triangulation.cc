@@ -126,11 +126,7 @@ bool triangulateLandmark(const FilterState& state, const CameraClone& clone, con
     const Eigen::Matrix<double, 15, 15> P_xe = gatherBlocks<5>(state.covariance(), all);
     // The new point's anchor (the current camera) rides on the extrinsic (landmark.h): l carries
     // what the anchor does not.
-    Mat3 Y_pbc, Y_thc;
-    t.landmark.extrinsicJacobian(T_b_c.R_b_c, &Y_pbc, &Y_thc);
-    Eigen::Matrix<double, 3, 6> Y_ext;
-    Y_ext << Y_pbc, Y_thc;
-    t.J_ext = D * (J_X_ext - Y_ext);
+    t.J_ext = D * (J_X_ext - t.landmark.extrinsicJacobian(T_b_c.R_b_c));
     Eigen::Matrix<double, 3, 15> J_se;
     J_se << t.J_state, t.J_ext;
     Eigen::Matrix<double, 1, 15> g_se;

@@ -40,10 +40,9 @@ bool predictObservation(const MotionState& x, const Landmark& lm, const CameraMo
     J->H_thc = J_pi * T_b_c.R_b_c.transpose() * skew(R_s_b.transpose() * q_s);
     // An inverse-depth anchor rides on the extrinsic (landmark.h): q_s = w (Y - p_s_c) moves with it.
     if (lm.kind == LandmarkKind::kInverseDepth) {
-      Mat3 Y_pbc, Y_thc;
-      lm.extrinsicJacobian(T_b_c.R_b_c, &Y_pbc, &Y_thc);
-      J->H_pbc += w * JR * Y_pbc;
-      J->H_thc += w * JR * Y_thc;
+      const Eigen::Matrix<double, 2, 6> H_anchor = w * JR * lm.extrinsicJacobian(T_b_c.R_b_c);
+      J->H_pbc += H_anchor.leftCols<3>();
+      J->H_thc += H_anchor.rightCols<3>();
     }
   }
   return true;

@@ -283,9 +283,13 @@ void VioPipeline::process(QueuedFrame& f) {
   FrameResult r = filter_->processFrame(features);
   std::optional<NavState> nav;
   // The map kept across resets: the points leaving a filter that is in it, or placing one that is not.
-  if (r.processed && r.lost.empty() && config_.map.keptAcrossRuns() && in_map_) map_.merge(r.left_the_state);
-  if (r.processed && r.lost.empty() && config_.map.keptAcrossRuns() && !in_map_ && !map_.empty())
-    tryRelocalize(features);
+  if (r.processed && r.lost.empty() && config_.map.keptAcrossRuns()) {
+    if (in_map_) {
+      map_.merge(r.left_the_state);
+    } else if (!map_.empty()) {
+      tryRelocalize(features);
+    }
+  }
   if (r.processed && r.lost.empty()) {
     nav = filter_->navState();
     if (!allFinite(*nav)) r.lost = "the filter state became non-finite";

@@ -67,18 +67,15 @@ struct Landmark {
     return Vec3(p_a.x() / p_a.z(), p_a.y() / p_a.z(), 1.0 / p_a.z());
   }
 
-  /// The point's derivative w.r.t. the extrinsic's errors (p_b_c; theta with R_b_c = Exp(theta)
+  /// The point's derivative w.r.t. the extrinsic's errors [p_b_c, theta] (R_b_c = Exp(theta)
   /// R_b_c) at fixed l, the anchor riding on the extrinsic whose estimated rotation is R_b_c. Zero
   /// for a Cartesian point.
-  void extrinsicJacobian(const Mat3& R_b_c, Mat3* J_pbc, Mat3* J_thc) const {
-    if (kind == LandmarkKind::kCartesian) {
-      J_pbc->setZero();
-      J_thc->setZero();
-      return;
-    }
+  Eigen::Matrix<double, 3, 6> extrinsicJacobian(const Mat3& R_b_c) const {
+    Eigen::Matrix<double, 3, 6> J = Eigen::Matrix<double, 3, 6>::Zero();
+    if (kind == LandmarkKind::kCartesian) return J;
     const Mat3 R_s_ab = R_s_a * R_b_c.transpose();  // the anchor body's orientation
-    *J_pbc = R_s_ab;
-    *J_thc = -skew(position() - p_s_a) * R_s_ab;
+    J << R_s_ab, -skew(position() - p_s_a) * R_s_ab;
+    return J;
   }
 
   /// The anchor of the same body pose under another extrinsic (from -> to): l is unchanged, so an
