@@ -177,7 +177,7 @@ UpdateResult ekfUpdate(FilterState& state, const std::vector<FeatureObservation>
     state.x = x0;
     for (int i = 0; i < state.numLandmarks(); ++i) state.landmark(i) = l0[static_cast<size_t>(i)];
   };
-  Eigen::MatrixXd PHt, S, K;
+  Eigen::MatrixXd PHt, S;
   Eigen::VectorXd r, d = Eigen::VectorXd::Zero(n);
   Eigen::LLT<Eigen::MatrixXd> llt;
   const int iterations = std::max(1, params.iterations);
@@ -188,7 +188,8 @@ UpdateResult ekfUpdate(FilterState& state, const std::vector<FeatureObservation>
   double prior_cost = 0.0, accepted_cost = std::numeric_limits<double>::infinity();
   struct Iterate {
     Eigen::VectorXd d;
-    Eigen::MatrixXd PHt, S, K;
+    Eigen::MatrixXd PHt;
+    Eigen::LLT<Eigen::MatrixXd> llt;
     std::vector<AcceptedObservation> acc;
   };
   std::optional<Iterate> kept;
@@ -210,8 +211,7 @@ UpdateResult ekfUpdate(FilterState& state, const std::vector<FeatureObservation>
   auto revertToKept = [&] {
     d = kept->d;
     PHt = kept->PHt;
-    S = kept->S;
-    K = kept->K;
+    llt = kept->llt;
     acc = kept->acc;
   };
   for (int it = 0; it < iterations; ++it) {
@@ -228,13 +228,13 @@ UpdateResult ekfUpdate(FilterState& state, const std::vector<FeatureObservation>
       }
       accepted_cost = cost;
       acc = std::move(next);
-      kept = Iterate{d, PHt, S, K, acc};
+      kept = Iterate{d, PHt, llt, acc};
     }
     const std::vector<MeasurementRows> rows = rowsOf(acc, r_var);
     innovationCovariance(P, rows, &PHt, &S);
     r = stackedResidual(rows);
     const Eigen::VectorXd Hd = applyJacobian(rows, d);
-    if (!kalmanGain(PHt, S, &llt, &K)) {  // numerically broken P: refuse rather than corrupt it
+    if (!factorInnovation(S, &llt)) {  // numerically broken P: refuse rather than corrupt it
       restorePrior();
       for (const auto& a : acc) result.invalid_ids.push_back(a.id);
       result.accepted = 0;
@@ -256,8 +256,8 @@ UpdateResult ekfUpdate(FilterState& state, const std::vector<FeatureObservation>
   }
   restorePrior();
 
-  // 3) The covariance, once, with the last gain (Joseph form).
-  josephUpdate(P, K, S, PHt);
+  // 3) The covariance, once, with the last gain.
+  optimalGainCovarianceUpdate(P, PHt, llt);
   state.boxplus(d);
   return result;
 }

@@ -16,14 +16,60 @@ Eigen::MatrixXd multiplyByTransposeOnRight(const Eigen::MatrixXd& M, const Frame
   const Eigen::Index rows = M.rows();
   Eigen::MatrixXd out(rows, m_out + 3 * N);
   out.leftCols(m_out).noalias() = M.leftCols(m_in) * J.J_motion.transpose();
-  const auto M_pos = M.middleCols<3>(J.pos_col);
-  const auto M_rot = M.middleCols<3>(J.rot_col);
+  if (N == 0) return out;
+  // Every landmark's pose terms in one product, [M_pos M_rot] (rows x 6) times the 6 x 3N stack
+  // of [A_pos_i^T; A_rot_i^T]: N small 3x3 products per row block vectorized badly and were the
+  // composition's largest cost once the map is kept.
+  Eigen::MatrixXd A(6, 3 * N);
   for (int i = 0; i < N; ++i) {
     const size_t k = static_cast<size_t>(i);
-    auto o = out.middleCols<3>(m_out + 3 * i);
-    o.noalias() = M.middleCols<3>(m_in + 3 * i) * J.L[k].transpose();
-    o.noalias() += M_pos * J.A_pos[k].transpose();
-    o.noalias() += M_rot * J.A_rot[k].transpose();
+    A.block<3, 3>(0, 3 * i) = J.A_pos[k].transpose();
+    A.block<3, 3>(3, 3 * i) = J.A_rot[k].transpose();
+  }
+  Eigen::MatrixXd M_pose(rows, 6);
+  M_pose << M.middleCols<3>(J.pos_col), M.middleCols<3>(J.rot_col);
+  auto lm = out.rightCols(3 * N);
+  lm.noalias() = M_pose * A;
+  for (int i = 0; i < N; ++i) {
+    const size_t k = static_cast<size_t>(i);
+    auto o = lm.middleCols<3>(3 * i);
+    if (J.L[k] == Mat3::Identity()) {  // an inverse-depth landmark's own parameters are unchanged
+      o += M.middleCols<3>(m_in + 3 * i);
+    } else {
+      o.noalias() += M.middleCols<3>(m_in + 3 * i) * J.L[k].transpose();
+    }
+  }
+  return out;
+}
+
+/// J T for any T with as many rows as the input state (row blocks only): the same structure as
+/// multiplyByTransposeOnRight from the left, without forming T^T.
+Eigen::MatrixXd multiplyOnLeft(const FrameChangeJacobian& J, const Eigen::MatrixXd& T) {
+  const int m_in = static_cast<int>(J.J_motion.cols());
+  const int m_out = static_cast<int>(J.J_motion.rows());
+  const int N = static_cast<int>(J.A_rot.size());
+  const Eigen::Index cols = T.cols();
+  Eigen::MatrixXd out(m_out + 3 * N, cols);
+  out.topRows(m_out).noalias() = J.J_motion * T.topRows(m_in);
+  if (N == 0) return out;
+  Eigen::MatrixXd A(3 * N, 6);
+  for (int i = 0; i < N; ++i) {
+    const size_t k = static_cast<size_t>(i);
+    A.block<3, 3>(3 * i, 0) = J.A_pos[k];
+    A.block<3, 3>(3 * i, 3) = J.A_rot[k];
+  }
+  Eigen::MatrixXd T_pose(6, cols);
+  T_pose << T.middleRows<3>(J.pos_col), T.middleRows<3>(J.rot_col);
+  auto lm = out.bottomRows(3 * N);
+  lm.noalias() = A * T_pose;
+  for (int i = 0; i < N; ++i) {
+    const size_t k = static_cast<size_t>(i);
+    auto o = lm.middleRows<3>(3 * i);
+    if (J.L[k] == Mat3::Identity()) {
+      o += T.middleRows<3>(m_in + 3 * i);
+    } else {
+      o.noalias() += J.L[k] * T.middleRows<3>(m_in + 3 * i);
+    }
   }
   return out;
 }
@@ -91,9 +137,9 @@ void checkFinite(const Eigen::MatrixXd& P) {
 }  // namespace
 
 Eigen::MatrixXd applyFrameChange(const Eigen::MatrixXd& P, const FrameChangeJacobian& J) {
-  // P' = J (P J^T) = (J (J P)^T) ... with P symmetric: T = P J^T, P' = (T^T) J^T.
+  // P' = J (P J^T): T = P J^T, then J T, both by blocks of J.
   const Eigen::MatrixXd T = multiplyByTransposeOnRight(P, J);
-  Eigen::MatrixXd Pn = multiplyByTransposeOnRight(T.transpose(), J);
+  Eigen::MatrixXd Pn = multiplyOnLeft(J, T);
   symmetrize(Pn);
   return Pn;
 }

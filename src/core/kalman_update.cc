@@ -70,39 +70,32 @@ double normalizedInnovation(const Eigen::MatrixXd& P, const MeasurementRows& row
   return std::isfinite(d2) ? d2 : std::numeric_limits<double>::infinity();
 }
 
-bool kalmanGain(const Eigen::MatrixXd& PHt, const Eigen::MatrixXd& S, Eigen::LLT<Eigen::MatrixXd>* llt,
-                Eigen::MatrixXd* K) {
+bool factorInnovation(const Eigen::MatrixXd& S, Eigen::LLT<Eigen::MatrixXd>* llt) {
   llt->compute(S);
-  if (llt->info() != Eigen::Success) return false;
-  *K = llt->solve(PHt.transpose()).transpose();  // P H^T S^-1
-  return true;
+  return llt->info() == Eigen::Success;
 }
 
-void josephUpdate(Eigen::MatrixXd& P, const Eigen::MatrixXd& K, const Eigen::MatrixXd& S, const Eigen::MatrixXd& PHt) {
-  const Eigen::Index n = P.rows(), m = K.cols();
-  Eigen::MatrixXd KW(n, 2 * m), WK(n, 2 * m);
-  KW.leftCols(m) = K;
-  KW.rightCols(m).noalias() = 0.5 * K * S - PHt;
-  WK.leftCols(m) = KW.rightCols(m);
-  WK.rightCols(m) = K;
-  P.triangularView<Eigen::Lower>() += KW * WK.transpose();
+void optimalGainCovarianceUpdate(Eigen::MatrixXd& P, const Eigen::MatrixXd& PHt, const Eigen::LLT<Eigen::MatrixXd>& llt) {
+  // A^T = L^-1 (P H^T)^T, so A A^T = P H^T S^-1 H P.
+  const Eigen::MatrixXd At = llt.matrixL().solve(PHt.transpose());
+  P.selfadjointView<Eigen::Lower>().rankUpdate(At.transpose(), -1.0);
   P.triangularView<Eigen::StrictlyUpper>() = P.transpose();
 }
 
 KalmanUpdateResult kalmanUpdate(FilterState& state, const std::vector<MeasurementRows>& rows, double gate_probability) {
   KalmanUpdateResult res;
-  Eigen::MatrixXd PHt, S, K;
+  Eigen::MatrixXd PHt, S;
   innovationCovariance(state.covariance(), rows, &PHt, &S);
   Eigen::LLT<Eigen::MatrixXd> llt;
-  if (!kalmanGain(PHt, S, &llt, &K)) return res;
+  if (!factorInnovation(S, &llt)) return res;
   const Eigen::VectorXd r = stackedResidual(rows);
   res.nis = r.dot(llt.solve(r));
   if (!std::isfinite(res.nis)) return res;
   if (gate_probability > 0.0 && res.nis > chiSquaredQuantile(gate_probability, static_cast<double>(r.size()))) {
     return res;
   }
-  const Eigen::VectorXd dx = K * r;
-  josephUpdate(state.mutableCovariance(), K, S, PHt);
+  const Eigen::VectorXd dx = PHt * llt.solve(r);
+  optimalGainCovarianceUpdate(state.mutableCovariance(), PHt, llt);
   state.boxplus(dx);
   res.applied = true;
   return res;

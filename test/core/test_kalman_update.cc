@@ -1,6 +1,7 @@
 // The one update step (kalman_update.h) against the textbook EKF with a dense H.
 #include <gtest/gtest.h>
 
+#include <Eigen/Eigenvalues>
 #include <random>
 
 #include "test_helpers.h"
@@ -100,23 +101,31 @@ TEST(KalmanUpdate, UpdateEqualsTheTextbookJosephForm) {
   }
 }
 
-TEST(KalmanUpdate, JosephFormHoldsForASuboptimalGain) {
-  // The expanded form is the Joseph form for any gain, not only the optimal one.
+TEST(KalmanUpdate, ANearlyExactMeasurementLeavesTheCovarianceSymmetricAndPositiveSemidefinite) {
+  // The rank-m form P - A A^T subtracts nearly all of P's variance along what a measurement of
+  // almost no noise observes: the result must stay exactly symmetric, without a negative
+  // eigenvalue beyond rounding, and equal to the textbook Joseph form.
   std::mt19937_64 rng(13);
   const FilterState s = test::randomState(Mechanization::kSensorCentric, 2, rng);
-  const std::vector<MeasurementRows> rows = randomRows(s, rng, 1.0);
+  std::vector<MeasurementRows> rows = randomRows(s, rng, 1.0);
+  for (auto& r : rows) r.noise_var = 1e-10;
+  const Eigen::MatrixXd P0 = s.covariance();
   const Eigen::MatrixXd H = denseJacobian(rows, s.dim());
   const Eigen::MatrixXd R = noiseOf(rows);
-  Eigen::MatrixXd P = s.covariance(), PHt, S, K;
+  Eigen::MatrixXd P = P0, PHt, S;
   innovationCovariance(P, rows, &PHt, &S);
   Eigen::LLT<Eigen::MatrixXd> llt;
-  ASSERT_TRUE(kalmanGain(PHt, S, &llt, &K));
-  K *= 0.8;
-  const Eigen::MatrixXd IKH = Eigen::MatrixXd::Identity(s.dim(), s.dim()) - K * H;
-  const Eigen::MatrixXd expected = IKH * P * IKH.transpose() + K * R * K.transpose();
-  josephUpdate(P, K, S, PHt);
-  EXPECT_LT((P - expected).cwiseAbs().maxCoeff(), 1e-10);
+  ASSERT_TRUE(factorInnovation(S, &llt));
+  optimalGainCovarianceUpdate(P, PHt, llt);
   EXPECT_EQ(P, P.transpose());
+  const Eigen::MatrixXd K = P0 * H.transpose() * S.inverse();
+  const Eigen::MatrixXd IKH = Eigen::MatrixXd::Identity(s.dim(), s.dim()) - K * H;
+  const Eigen::MatrixXd expected = IKH * P0 * IKH.transpose() + K * R * K.transpose();
+  EXPECT_LT((P - expected).cwiseAbs().maxCoeff(), 1e-9 * P0.cwiseAbs().maxCoeff());
+  const Eigen::VectorXd eig = Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd>(P).eigenvalues();
+  EXPECT_GT(eig.minCoeff(), -1e-9 * P0.cwiseAbs().maxCoeff());
+  // What the 5 rows observe is now known to about their noise.
+  EXPECT_LT((H * P * H.transpose()).cwiseAbs().maxCoeff(), 1e-8);
 }
 
 TEST(KalmanUpdate, TheGateRefusesAnInnovationBeyondItsQuantileAndLeavesTheStateAlone) {

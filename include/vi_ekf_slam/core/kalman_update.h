@@ -2,8 +2,8 @@
 // its rows: the Jacobian as column blocks of the error state (H is sparse: a feature touches the
 // pose, the time offset and its landmark; a zero-velocity update the velocity), its residual
 // z - h(x) and its noise. This file does the rest: P H^T and the innovation covariance from the
-// blocks (O(n m), H is never formed), the NIS, the chi-square gate, the gain and the Joseph-form
-// covariance update. Adding a measurement is one builder of MeasurementRows and a call.
+// blocks (O(n m), H is never formed), the NIS, the chi-square gate, the gain and the covariance
+// update. Adding a measurement is one builder of MeasurementRows and a call.
 #pragma once
 
 #include <Eigen/Cholesky>
@@ -38,15 +38,16 @@ Eigen::VectorXd stackedResidual(const std::vector<MeasurementRows>& rows);
 /// r^T S^-1 r of one measurement alone (its own S), for its gate; +inf if S is not positive definite.
 double normalizedInnovation(const Eigen::MatrixXd& P, const MeasurementRows& rows);
 
-/// The gain K = P H^T S^-1 through the Cholesky factor of S (computed into *llt). False if S is
-/// not positive definite: then nothing may be updated.
-bool kalmanGain(const Eigen::MatrixXd& PHt, const Eigen::MatrixXd& S, Eigen::LLT<Eigen::MatrixXd>* llt,
-                Eigen::MatrixXd* K);
-/// Joseph form (I-KH) P (I-KH)^T + K R K^T, expanded without forming I-KH: P - K B^T - B K^T +
-/// K S K^T with B = P H^T. It holds for any gain K, so errors in K enter P only to second order,
-/// at O(n^2 m) cost. Written as P + K W^T + W K^T with W = K S / 2 - B, one product [K W] [W K]^T
-/// of which only the lower triangle is computed and mirrored: P stays exactly symmetric.
-void josephUpdate(Eigen::MatrixXd& P, const Eigen::MatrixXd& K, const Eigen::MatrixXd& S, const Eigen::MatrixXd& PHt);
+/// The Cholesky factor of S (into *llt), through which the gain K = P H^T S^-1 acts (K itself,
+/// n x m, is never formed: the correction is P H^T (S^-1 r)). False if S is not positive
+/// definite: then nothing may be updated.
+bool factorInnovation(const Eigen::MatrixXd& S, Eigen::LLT<Eigen::MatrixXd>* llt);
+/// The covariance after an update with the optimal gain, P - P H^T S^-1 H P, as P - A A^T with
+/// A = P H^T L^-T (S = L L^T, `llt` from factorInnovation): the Joseph form (I-KH) P (I-KH)^T + K R K^T
+/// for that gain, in one symmetric rank-m product of which only the lower triangle is computed
+/// and mirrored (P stays exactly symmetric). O(n^2 m / 2), half the expanded Joseph form's
+/// O(n^2 m), which the state's size makes the update's largest cost once the map is kept.
+void optimalGainCovarianceUpdate(Eigen::MatrixXd& P, const Eigen::MatrixXd& PHt, const Eigen::LLT<Eigen::MatrixXd>& llt);
 
 struct KalmanUpdateResult {
   bool applied = false;
@@ -54,7 +55,7 @@ struct KalmanUpdateResult {
 };
 
 /// The whole step for a measurement linear in the error state: NIS, the gate (chi-square of the
-/// stacked dimension at gate_probability; <= 0: none), gain, Joseph update, and the correction
+/// stacked dimension at gate_probability; <= 0: none), gain, covariance update, and the correction
 /// applied to the state.
 KalmanUpdateResult kalmanUpdate(FilterState& state, const std::vector<MeasurementRows>& rows, double gate_probability);
 
