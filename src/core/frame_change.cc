@@ -8,6 +8,20 @@ namespace vi_ekf_slam {
 
 namespace {
 
+/// Every landmark's pose blocks stacked, [A_pos_i A_rot_i] as rows 3i..3i+2 (3N x 6): the
+/// landmarks' pose terms of a frame change are then one product from either side (N small 3x3
+/// products vectorized badly and were the composition's largest cost once the map is kept).
+Eigen::MatrixXd stackedPoseBlocks(const FrameChangeJacobian& J) {
+  const int N = static_cast<int>(J.A_rot.size());
+  Eigen::MatrixXd A(3 * N, 6);
+  for (int i = 0; i < N; ++i) {
+    const size_t k = static_cast<size_t>(i);
+    A.block<3, 3>(3 * i, 0) = J.A_pos[k];
+    A.block<3, 3>(3 * i, 3) = J.A_rot[k];
+  }
+  return A;
+}
+
 /// M J^T for any M with as many columns as the input state (column blocks only, O(rows * n)).
 Eigen::MatrixXd multiplyByTransposeOnRight(const Eigen::MatrixXd& M, const FrameChangeJacobian& J) {
   const int m_in = static_cast<int>(J.J_motion.cols());
@@ -17,19 +31,10 @@ Eigen::MatrixXd multiplyByTransposeOnRight(const Eigen::MatrixXd& M, const Frame
   Eigen::MatrixXd out(rows, m_out + 3 * N);
   out.leftCols(m_out).noalias() = M.leftCols(m_in) * J.J_motion.transpose();
   if (N == 0) return out;
-  // Every landmark's pose terms in one product, [M_pos M_rot] (rows x 6) times the 6 x 3N stack
-  // of [A_pos_i^T; A_rot_i^T]: N small 3x3 products per row block vectorized badly and were the
-  // composition's largest cost once the map is kept.
-  Eigen::MatrixXd A(6, 3 * N);
-  for (int i = 0; i < N; ++i) {
-    const size_t k = static_cast<size_t>(i);
-    A.block<3, 3>(0, 3 * i) = J.A_pos[k].transpose();
-    A.block<3, 3>(3, 3 * i) = J.A_rot[k].transpose();
-  }
   Eigen::MatrixXd M_pose(rows, 6);
   M_pose << M.middleCols<3>(J.pos_col), M.middleCols<3>(J.rot_col);
   auto lm = out.rightCols(3 * N);
-  lm.noalias() = M_pose * A;
+  lm.noalias() = M_pose * stackedPoseBlocks(J).transpose();
   for (int i = 0; i < N; ++i) {
     const size_t k = static_cast<size_t>(i);
     auto o = lm.middleCols<3>(3 * i);
@@ -52,16 +57,10 @@ Eigen::MatrixXd multiplyOnLeft(const FrameChangeJacobian& J, const Eigen::Matrix
   Eigen::MatrixXd out(m_out + 3 * N, cols);
   out.topRows(m_out).noalias() = J.J_motion * T.topRows(m_in);
   if (N == 0) return out;
-  Eigen::MatrixXd A(3 * N, 6);
-  for (int i = 0; i < N; ++i) {
-    const size_t k = static_cast<size_t>(i);
-    A.block<3, 3>(3 * i, 0) = J.A_pos[k];
-    A.block<3, 3>(3 * i, 3) = J.A_rot[k];
-  }
   Eigen::MatrixXd T_pose(6, cols);
   T_pose << T.middleRows<3>(J.pos_col), T.middleRows<3>(J.rot_col);
   auto lm = out.bottomRows(3 * N);
-  lm.noalias() = A * T_pose;
+  lm.noalias() = stackedPoseBlocks(J) * T_pose;
   for (int i = 0; i < N; ++i) {
     const size_t k = static_cast<size_t>(i);
     auto o = lm.middleRows<3>(3 * i);

@@ -75,7 +75,8 @@ bool factorInnovation(const Eigen::MatrixXd& S, Eigen::LLT<Eigen::MatrixXd>* llt
   return llt->info() == Eigen::Success;
 }
 
-void optimalGainCovarianceUpdate(Eigen::MatrixXd& P, const Eigen::MatrixXd& PHt, const Eigen::LLT<Eigen::MatrixXd>& llt) {
+void optimalGainCovarianceUpdate(Eigen::MatrixXd& P, const Eigen::MatrixXd& PHt,
+                                 const Eigen::LLT<Eigen::MatrixXd>& llt) {
   // A^T = L^-1 (P H^T)^T, so A A^T = P H^T S^-1 H P.
   const Eigen::MatrixXd At = llt.matrixL().solve(PHt.transpose());
   P.selfadjointView<Eigen::Lower>().rankUpdate(At.transpose(), -1.0);

@@ -47,7 +47,8 @@ bool factorInnovation(const Eigen::MatrixXd& S, Eigen::LLT<Eigen::MatrixXd>* llt
 /// for that gain, in one symmetric rank-m product of which only the lower triangle is computed
 /// and mirrored (P stays exactly symmetric). O(n^2 m / 2), half the expanded Joseph form's
 /// O(n^2 m), which the state's size makes the update's largest cost once the map is kept.
-void optimalGainCovarianceUpdate(Eigen::MatrixXd& P, const Eigen::MatrixXd& PHt, const Eigen::LLT<Eigen::MatrixXd>& llt);
+void optimalGainCovarianceUpdate(Eigen::MatrixXd& P, const Eigen::MatrixXd& PHt,
+                                 const Eigen::LLT<Eigen::MatrixXd>& llt);
 
 struct KalmanUpdateResult {
   bool applied = false;
