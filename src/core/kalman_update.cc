@@ -90,12 +90,13 @@ KalmanUpdateResult kalmanUpdate(FilterState& state, const std::vector<Measuremen
   Eigen::LLT<Eigen::MatrixXd> llt;
   if (!factorInnovation(S, &llt)) return res;
   const Eigen::VectorXd r = stackedResidual(rows);
-  res.nis = r.dot(llt.solve(r));
+  const Eigen::VectorXd Sinv_r = llt.solve(r);
+  res.nis = r.dot(Sinv_r);
   if (!std::isfinite(res.nis)) return res;
   if (gate_probability > 0.0 && res.nis > chiSquaredQuantile(gate_probability, static_cast<double>(r.size()))) {
     return res;
   }
-  const Eigen::VectorXd dx = PHt * llt.solve(r);
+  const Eigen::VectorXd dx = PHt * Sinv_r;
   optimalGainCovarianceUpdate(state.mutableCovariance(), PHt, llt);
   state.boxplus(dx);
   res.applied = true;
