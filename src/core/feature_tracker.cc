@@ -1,5 +1,6 @@
 #include "vi_ekf_slam/core/feature_tracker.h"
 
+#include "vi_ekf_slam/core/orb_descriptors.h"
 #include "vi_ekf_slam/core/param_ranges.h"
 
 #include <algorithm>
@@ -63,23 +64,6 @@ cv::Mat toTrackingResolution(const cv::Mat& img, const CameraIntrinsics& trackin
 FeatureTracker::FeatureTracker(const CameraModel& camera, const TrackerParams& params)
     : camera_(camera), params_(params) {}
 
-std::vector<std::optional<Descriptor>> FeatureTracker::describe(const cv::Mat& img,
-                                                                const std::vector<cv::Point2f>& pts) const {
-  std::vector<std::optional<Descriptor>> out(pts.size());
-  if (pts.empty()) return out;
-  std::vector<cv::KeyPoint> kps;
-  for (size_t i = 0; i < pts.size(); ++i) kps.emplace_back(pts[i], 31.0f, -1.0f, 0.0f, 0, static_cast<int>(i));
-  cv::Mat desc;
-  orb_->compute(img, kps, desc);  // drops the points too near the border; class_id says which is which
-  for (size_t k = 0; k < kps.size() && static_cast<int>(k) < desc.rows; ++k) {
-    Descriptor d;
-    std::copy(desc.ptr<std::uint8_t>(static_cast<int>(k)), desc.ptr<std::uint8_t>(static_cast<int>(k)) + d.size(),
-              d.begin());
-    out[static_cast<size_t>(kps[k].class_id)] = d;
-  }
-  return out;
-}
-
 std::vector<FeatureObservation> FeatureTracker::searchCorners(const cv::Mat& img,
                                                               const std::vector<SearchRegion>& regions) {
   std::vector<cv::Point2f> found;
@@ -106,7 +90,7 @@ std::vector<FeatureObservation> FeatureTracker::searchCorners(const cv::Mat& img
     }
   }
   std::vector<FeatureObservation> corners;
-  const auto desc = describe(img, found);
+  const auto desc = describeOrb(*orb_, img, found);
   for (size_t i = 0; i < found.size(); ++i)
     if (desc[i]) corners.push_back({static_cast<std::int64_t>(i), Eigen::Vector2d(found[i].x, found[i].y), desc[i]});
   return corners;
@@ -213,7 +197,7 @@ CameraFrame FeatureTracker::track(double timestamp, const cv::Mat& img,
     images_since_described_ = 0;
     std::vector<cv::Point2f> pts;
     for (const auto& t : tracks_) pts.push_back(t.uv);
-    const auto desc = describe(img, pts);
+    const auto desc = describeOrb(*orb_, img, pts);
     for (size_t i = 0; i < pts.size(); ++i)
       if (desc[i]) tracks_[i].latest_descriptor = desc[i];
   }
@@ -308,7 +292,7 @@ void FeatureTracker::detect(const cv::Mat& img) {
   if (params_.descriptors && added > 0) {
     std::vector<cv::Point2f> pts;
     for (size_t i = tracks_.size() - static_cast<size_t>(added); i < tracks_.size(); ++i) pts.push_back(tracks_[i].uv);
-    const auto desc = describe(img, pts);
+    const auto desc = describeOrb(*orb_, img, pts);
     for (size_t i = 0; i < pts.size(); ++i) {
       Track& t = tracks_[tracks_.size() - pts.size() + i];
       t.descriptor = t.latest_descriptor = desc[i];

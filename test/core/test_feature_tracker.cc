@@ -2,7 +2,8 @@
 // rotation follows a rotation-only homography to a fraction of a pixel, corners respect the grid
 // quota, spacing, border and the quality floor relative to the best corner, the search waits
 // for redetect_fraction, and bad images
-// (another size, no texture) reset or starve the tracker without crashing.
+// (another size, no texture) reset or starve the tracker without crashing. ORB descriptors
+// computed in windows equal those of the whole image.
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -13,6 +14,7 @@
 #include <set>
 
 #include "vi_ekf_slam/core/feature_tracker.h"
+#include "vi_ekf_slam/core/orb_descriptors.h"
 #include "vi_ekf_slam/core/so3.h"
 
 // After Eigen (pulled in above): OpenCV's Eigen bridge needs it first.
@@ -296,6 +298,52 @@ TEST(FeatureTracker, WideImagesAreTrackedShrunkWithTheirOwnIntrinsics) {
     EXPECT_NEAR(m.m01 / m.m00, uv_t.y(), 0.05);
   }
   EXPECT_EQ(toTrackingResolution(cv::Mat(450, 800, CV_8U, cv::Scalar(0)), t).cols, 800);
+}
+
+TEST(OrbDescriptors, WindowsDescribeAsTheWholeImageDoes) {
+  const cv::Mat img = texture(640, 480, 200.0, 11);
+  cv::Ptr<cv::ORB> orb = cv::ORB::create();
+  // Points everywhere, sub-pixel, the border's neighbourhood included (those ORB drops).
+  cv::RNG rng(5);
+  std::vector<cv::Point2f> pts;
+  for (int i = 0; i < 400; ++i) pts.emplace_back(rng.uniform(-5.0f, 645.0f), rng.uniform(-5.0f, 485.0f));
+  for (float b : {30.5f, 31.0f, 31.5f, 608.0f, 608.5f, 609.0f}) {
+    pts.emplace_back(b, 240.3f);
+    pts.emplace_back(320.7f, b - 160.0f);
+  }
+  for (float h : {100.5f, 101.5f, 250.5f, 251.5f}) pts.emplace_back(h, h + 1.0f);  // ORB rounds half to even
+  // The whole image's descriptors, as cv::ORB gives them.
+  std::vector<cv::KeyPoint> kps;
+  for (size_t i = 0; i < pts.size(); ++i) kps.emplace_back(pts[i], 31.0f, -1.0f, 0.0f, 0, static_cast<int>(i));
+  cv::Mat desc;
+  orb->compute(img, kps, desc);
+  std::vector<std::optional<Descriptor>> whole(pts.size());
+  for (int k = 0; k < desc.rows; ++k) {
+    Descriptor d;
+    std::copy(desc.ptr<std::uint8_t>(k), desc.ptr<std::uint8_t>(k) + d.size(), d.begin());
+    whole[static_cast<size_t>(kps[static_cast<size_t>(k)].class_id)] = d;
+  }
+  // Few points at a time are described in windows, all at once on the whole image.
+  int described = 0, dropped = 0;
+  for (size_t i = 0; i < pts.size(); i += 3) {
+    const std::vector<cv::Point2f> few(pts.begin() + static_cast<long>(i),
+                                       pts.begin() + static_cast<long>(std::min(pts.size(), i + 3)));
+    const auto got = describeOrb(*orb, img, few);
+    ASSERT_EQ(got.size(), few.size());
+    for (size_t j = 0; j < few.size(); ++j) {
+      ASSERT_EQ(got[j].has_value(), whole[i + j].has_value()) << few[j];
+      if (got[j]) {
+        EXPECT_EQ(*got[j], *whole[i + j]) << few[j];
+        ++described;
+      } else {
+        ++dropped;
+      }
+    }
+  }
+  EXPECT_GT(described, 300);
+  EXPECT_GT(dropped, 20);  // near the border
+  const auto all = describeOrb(*orb, img, pts);
+  for (size_t i = 0; i < pts.size(); ++i) EXPECT_EQ(all[i], whole[i]);
 }
 
 }  // namespace vi_ekf_slam

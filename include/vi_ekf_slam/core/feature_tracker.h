@@ -93,14 +93,12 @@ class FeatureTracker {
     std::optional<Descriptor> latest_descriptor;  ///< described again every kDescribeEveryFrames
   };
   void detect(const cv::Mat& img);
-  /// ORB descriptors at the points (none for a point too near the border to describe).
-  std::vector<std::optional<Descriptor>> describe(const cv::Mat& img, const std::vector<cv::Point2f>& pts) const;
   /// CameraFrame::search on `img` (the last tracked image): corners in each region (within four
   /// of its standard deviations, at most 64 px away), away from the tracks, with descriptors.
   std::vector<FeatureObservation> searchCorners(const cv::Mat& img, const std::vector<SearchRegion>& regions);
   /// CameraFrame::adopt: a corner of the last search becomes a track.
   std::int64_t adoptCorner(const FeatureObservation& corner);
-  cv::Ptr<cv::Feature2D> orb_ = cv::ORB::create();
+  cv::Ptr<cv::ORB> orb_ = cv::ORB::create();
   int images_since_described_ = 0;  ///< the tracks are described again every kDescribeEveryFrames
   cv::Point2f predict(const cv::Point2f& uv, const Eigen::Matrix3d& R_cur_prev) const;
 
