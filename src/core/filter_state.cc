@@ -87,13 +87,9 @@ void FilterState::removeLandmarks(std::vector<int> indices) {
     lms.push_back(landmarks_[static_cast<size_t>(i)]);
     for (int r = 0; r < 3; ++r) keep_rows.push_back(landmarkIndex(i) + r);
   }
-  const int m = static_cast<int>(keep_rows.size());
-  // Compact in place: keep_rows is increasing, so every destination precedes its source.
-  for (int j = 0; j < m; ++j) {
-    const int src_col = keep_rows[static_cast<size_t>(j)];
-    for (int i = 0; i < m; ++i) P_(i, j) = P_(keep_rows[static_cast<size_t>(i)], src_col);
-  }
-  P_.conservativeResize(m, m);
+  // One gather into the smaller matrix (compacting in place and then resizing copied P twice).
+  Eigen::MatrixXd kept = P_(keep_rows, keep_rows);
+  P_.swap(kept);
   landmark_ids_ = std::move(ids);
   landmarks_ = std::move(lms);
   rebuildIndex();
