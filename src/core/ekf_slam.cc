@@ -620,11 +620,24 @@ std::vector<RevisitMatch> EkfSlam::findRevisits(const CameraFrame& frame, std::v
     bool searched = false;
   };
   std::vector<Proposal> proposals;
-  // 1) The new tracks of this image (a point the detector found again).
+  // 1) The new tracks of this image (a point the detector found again), told apart from the
+  //    image's other tracks too (matchRevisits).
   std::vector<FeatureObservation> searching;
-  for (const auto& f : *fresh)
-    if (f.descriptor && !revisiting_.count(f.id)) searching.push_back(f);
-  for (const auto& m : matchRevisits(candidates, searching, config_.map)) {
+  std::unordered_set<std::int64_t> searching_ids;
+  for (const auto& f : *fresh) {
+    if (f.descriptor && !revisiting_.count(f.id)) {
+      searching.push_back(f);
+      searching_ids.insert(f.id);
+    }
+  }
+  std::vector<FeatureObservation> other_tracks, all_tracks;
+  for (const auto& f : frame.features) {
+    const auto& d = f.latest_descriptor ? f.latest_descriptor : f.descriptor;
+    if (!d) continue;
+    all_tracks.push_back({f.id, f.uv, d});
+    if (!searching_ids.count(f.id)) other_tracks.push_back(all_tracks.back());
+  }
+  for (const auto& m : matchRevisits(candidates, searching, config_.map, other_tracks)) {
     const auto f = std::find_if(searching.begin(), searching.end(), [&](const auto& o) { return o.id == m.track_id; });
     proposals.push_back({m, *f, false});
   }
@@ -642,7 +655,7 @@ std::vector<RevisitMatch> EkfSlam::findRevisits(const CameraFrame& frame, std::v
       regions.push_back({c.landmark_id, c.uv, c.S});
     }
     if (!regions.empty()) corners = frame.search(regions);
-    for (const auto& m : matchRevisits(rest, corners, config_.map)) {
+    for (const auto& m : matchRevisits(rest, corners, config_.map, all_tracks)) {
       const auto c = std::find_if(corners.begin(), corners.end(), [&](const auto& o) { return o.id == m.track_id; });
       proposals.push_back({m, *c, true});
     }

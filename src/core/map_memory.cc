@@ -2,6 +2,7 @@
 
 #include <Eigen/Cholesky>
 #include <Eigen/Eigenvalues>
+#include <algorithm>
 #include <bitset>
 #include <limits>
 
@@ -26,8 +27,8 @@ bool pendingRevisitAgrees(const Eigen::Vector2d& e, const Eigen::Matrix2d& S, co
 }
 
 std::vector<RevisitMatch> matchRevisits(const std::vector<RevisitCandidate>& candidates,
-                                        const std::vector<FeatureObservation>& features,
-                                        const MapMemoryParams& params) {
+                                        const std::vector<FeatureObservation>& features, const MapMemoryParams& params,
+                                        const std::vector<FeatureObservation>& elsewhere) {
   constexpr int kNone = std::numeric_limits<int>::max();
   const double gate = chiSquaredQuantile(params.search_gate_probability, 2.0);
   const double max_var = params.max_search_sigma_px * params.max_search_sigma_px;
@@ -64,12 +65,25 @@ std::vector<RevisitMatch> matchRevisits(const std::vector<RevisitCandidate>& can
       of_feature[f].offer(static_cast<int>(c), d);
     }
   }
+  // The landmark's side of the ratio test is over the whole image: a look-alike anywhere in view
+  // says the texture repeats, and the region's only look-alike may be another point while the
+  // detector missed the landmark itself (a tiled floor: the one pattern everywhere).
+  auto distinctInView = [&](size_t c, const Best& b) {
+    auto alike = [&](const FeatureObservation& f) {
+      return f.descriptor &&
+             !(b.distance < params.descriptor_ratio * hammingDistance(candidates[c].descriptor, *f.descriptor));
+    };
+    for (size_t f = 0; f < features.size(); ++f)
+      if (static_cast<int>(f) != b.index && alike(features[f])) return false;
+    return std::none_of(elsewhere.begin(), elsewhere.end(), alike);
+  };
   std::vector<RevisitMatch> matches;
   for (size_t c = 0; c < candidates.size(); ++c) {
     const Best& b = of_landmark[c];
     if (b.index < 0 || b.distance > params.max_descriptor_distance || !b.passes(params.descriptor_ratio)) continue;
     const Best& back = of_feature[static_cast<size_t>(b.index)];
     if (back.index != static_cast<int>(c) || !back.passes(params.descriptor_ratio)) continue;
+    if (params.distinct_in_view && !distinctInView(c, b)) continue;
     matches.push_back({features[static_cast<size_t>(b.index)].id, candidates[c].landmark_id, b.distance});
   }
   return matches;

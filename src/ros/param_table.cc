@@ -242,6 +242,11 @@ std::vector<ParamSpec> makeTable() {
             "largest Hamming distance (of 256) of a match to a dormant landmark", dyn),
       field("map_descriptor_ratio", "map", VI_FIELD(p.filter.map.descriptor_ratio), "ratio",
             "a match's distance must be below this fraction of the second best's, from either side", dyn),
+      field("map_distinct_in_view", "map", VI_FIELD(p.filter.map.distinct_in_view), "",
+            "a dormant landmark is recognized only if nothing else in the image looks like it (its side of the ratio "
+            "test over the whole image: where the texture repeats, the region's one look-alike may be another point "
+            "while the landmark itself went undetected); false: over its search region only",
+            dyn),
       field("map_search_gate_probability", "map", VI_FIELD(p.filter.map.search_gate_probability), "probability",
             "chi^2 gate (2 dof) of the region a dormant landmark is searched in", dyn),
       field("map_max_search_sigma_px", "map", VI_FIELD(p.filter.map.max_search_sigma_px), "px",

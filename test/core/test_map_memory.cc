@@ -1,5 +1,5 @@
 // Keeping the map: the search region of a landmark whose track ended, and the appearance match
-// that may re-identify it (map_memory.h).
+// that may re-identify it, only where nothing else in the image looks like it (map_memory.h).
 #include <gtest/gtest.h>
 
 #include "test_helpers.h"
@@ -64,10 +64,27 @@ TEST(MapMemory, TwoLookAlikesInOneRegionMatchNeither) {
       matchRevisits(one, {corner(1, {98, 100}, flipped(a, 10)), corner(2, {102, 100}, flipped(a, 11))}, p).empty());
   const std::vector<RevisitCandidate> two = {candidate(7, {100, 100}, 5.0, a), candidate(8, {104, 100}, 5.0, a)};
   EXPECT_TRUE(matchRevisits(two, {corner(1, {102, 100}, flipped(a, 10))}, p).empty());
-  // The same two landmarks far enough apart that each region holds only its own corner: both match.
+  // The same two landmarks far enough apart that each region holds only its own corner: still
+  // neither, each corner looks like the other landmark too (the texture repeats in view, and a
+  // region's one look-alike may be another point while the landmark itself went undetected).
   const std::vector<RevisitCandidate> apart = {candidate(7, {100, 100}, 5.0, a), candidate(8, {200, 100}, 5.0, a)};
+  const std::vector<FeatureObservation> far_corners = {corner(1, {101, 100}, flipped(a, 10)),
+                                                       corner(2, {199, 100}, flipped(a, 12))};
+  EXPECT_TRUE(matchRevisits(apart, far_corners, p).empty());
+  MapMemoryParams in_region = p;  // (the ratio test over the regions only: both match)
+  in_region.distinct_in_view = false;
+  EXPECT_EQ(matchRevisits(apart, far_corners, in_region).size(), 2u);
+  // So does a look-alike among the image's other features (a track's appearance).
+  EXPECT_TRUE(
+      matchRevisits(one, {corner(1, {101, 100}, flipped(a, 10))}, p, {corner(5, {300, 50}, flipped(a, 12))}).empty());
+  EXPECT_EQ(matchRevisits(one, {corner(1, {101, 100}, flipped(a, 10))}, p, {corner(5, {300, 50}, pattern(9))}).size(),
+            1u);
+  // Two landmarks that look different, each in its own region: both match.
+  const Descriptor b = pattern(5);
+  ASSERT_GT(hammingDistance(a, b), 80);
+  const std::vector<RevisitCandidate> unlike = {candidate(7, {100, 100}, 5.0, a), candidate(8, {200, 100}, 5.0, b)};
   const auto m =
-      matchRevisits(apart, {corner(1, {101, 100}, flipped(a, 10)), corner(2, {199, 100}, flipped(a, 12))}, p);
+      matchRevisits(unlike, {corner(1, {101, 100}, flipped(a, 10)), corner(2, {199, 100}, flipped(b, 12))}, p);
   ASSERT_EQ(m.size(), 2u);
   EXPECT_EQ(m[0].landmark_id, 7);
   EXPECT_EQ(m[0].track_id, 1);

@@ -81,6 +81,7 @@ TEST(MapReuse, RepeatedTextureClosesNoFalseLoop) {
   const Outcome weak = run(sc, [](EkfSlamConfig& c) {
     c.map.enabled = true;
     c.map.descriptor_ratio = 1.0;
+    c.map.distinct_in_view = false;
     c.map.search_gate_probability = 0.999999;
     c.map.max_search_sigma_px = 1000.0;
     c.map.min_joint_revisits = 1;

@@ -3,8 +3,8 @@
 // again), and a new track that is the same point is recognized by its appearance inside the
 // region where the filter predicts the landmark, then observes it as any other track does. The
 // search region is the landmark's predicted pixel with its innovation covariance (the
-// uncertainty the filter already carries), so a repeated texture outside it cannot be taken;
-// inside it, two look-alikes fail the ratio test and neither is taken.
+// uncertainty the filter already carries), so a repeated texture outside it cannot be taken, and
+// a landmark with a look-alike anywhere in the image is not recognized by its appearance at all.
 #pragma once
 
 #include <cstdint>
@@ -41,9 +41,14 @@ struct MapMemoryParams {
   /// A match's Hamming distance may be at most this [bits of 256] (ORB-SLAM's strict threshold).
   int max_descriptor_distance = 50;
   /// The best match's distance must be below this fraction of the second best's, both from the
-  /// landmark's side (features in its region) and from the feature's (landmarks whose region holds
-  /// it) [ratio].
+  /// landmark's side (other features: in its region, or with distinct_in_view in the whole image,
+  /// where the texture repeats, the region's one look-alike may be another point while the
+  /// landmark itself was not detected) and from the feature's (landmarks whose region holds it)
+  /// [ratio].
   double descriptor_ratio = 0.8;
+  /// The landmark's side of the ratio test is over every other feature of the image (false: over
+  /// its search region only).
+  bool distinct_in_view = true;
   /// The search region: the chi^2 gate (2 dof) of this probability on the predicted pixel.
   double search_gate_probability = 0.99;
   /// A dormant landmark is searched for only while its predicted pixel's std-dev (the larger axis
@@ -93,8 +98,14 @@ bool pendingRevisitAgrees(const Eigen::Vector2d& e, const Eigen::Matrix2d& S, co
 
 /// The features (with descriptors) that are landmarks of `candidates` seen again: inside the
 /// landmark's search region, within max_descriptor_distance, the mutual best, and passing the
-/// ratio test on both sides. Candidates wider than max_search_sigma_px are not searched.
+/// ratio test on both sides: against the other landmarks whose region holds the feature, and
+/// against the other features in the landmark's region or, with distinct_in_view, everything else
+/// in the image (the other `features` and `elsewhere`, the image's other features with their
+/// latest appearance): a landmark with a look-alike anywhere in view is not recognized by its
+/// appearance.
+/// Candidates wider than max_search_sigma_px are not searched.
 std::vector<RevisitMatch> matchRevisits(const std::vector<RevisitCandidate>& candidates,
-                                        const std::vector<FeatureObservation>& features, const MapMemoryParams& params);
+                                        const std::vector<FeatureObservation>& features, const MapMemoryParams& params,
+                                        const std::vector<FeatureObservation>& elsewhere = {});
 
 }  // namespace vi_ekf_slam
