@@ -2,10 +2,12 @@
 // with the topics of a real rig (bag_io.h): camera_info from cam0/sensor.yaml, /tf_static from
 // its T_BS, IMU covariances from imu0/sensor.yaml, ground truth as /ground_truth/pose.
 //
-//   vi_ekf_slam_asl_to_bag --asl FOLDER/mav0 --out FILE [--imu-margin S] [--start S]
+//   vi_ekf_slam_asl_to_bag --asl FOLDER/mav0 --out FILE [--imu-margin S] [--start S] [--euroc-topics]
 // IMU samples outside the camera's time span (plus the margin, default 1 s) are left out, so a
 // short image sequence does not carry the whole IMU log. --start S cuts the recording S seconds
 // after its first image: images and IMU both begin there, as when a node is started mid-walk.
+// --euroc-topics writes the official EuRoC bags' topics (/imu0, /cam0/image_raw) and
+// /cam0/camera_info, as a driver of that rig publishes them.
 #include <algorithm>
 #include <cstdio>
 #include <iostream>
@@ -20,13 +22,17 @@ using namespace vi_ekf_slam;
 int main(int argc, char** argv) {
   std::string asl, out;
   double margin = 1.0, start = 0.0;
-  const std::string usage = "vi_ekf_slam_asl_to_bag --asl FOLDER/mav0 --out FILE [--imu-margin S] [--start S]";
+  bool euroc_topics = false;
+  const std::string usage =
+      "vi_ekf_slam_asl_to_bag --asl FOLDER/mav0 --out FILE [--imu-margin S] [--start S] [--euroc-topics]";
   cli::po::options_description opts("options");
   opts.add_options()("asl", cli::po::value(&asl)->required(), "the ASL folder (mav0 with cam0, imu0)")(
       "out", cli::po::value(&out)->required(), "the bag to write")(
       "imu-margin", cli::po::value(&margin)->default_value(margin), "IMU kept around the images [s]")(
       "start", cli::po::value(&start)->default_value(start),
-      "cut everything before this time after the first image [s] (images and IMU begin together)");
+      "cut everything before this time after the first image [s] (images and IMU begin together)")(
+      "euroc-topics", cli::po::bool_switch(&euroc_topics),
+      "the EuRoC bags' topics /imu0, /cam0/image_raw (and /cam0/camera_info) instead of /imu, /camera/...");
   cli::parse(argc, argv, usage, "Converts an ASL/EuRoC folder into a bag with the topics of a real rig.", opts);
   if (!(margin >= 0.0)) cli::fail(usage, "--imu-margin must be >= 0");
   if (!(start >= 0.0)) cli::fail(usage, "--start must be >= 0");
@@ -49,7 +55,13 @@ int main(int argc, char** argv) {
     if (images.empty()) throw std::runtime_error("no images in " + asl + "/cam0");
     const double t0 = images.front().t - (start > 0.0 ? 0.0 : margin), t1 = images.back().t + margin;
     const double imu_rate = imu.size() > 1 ? (imu.size() - 1) / (imu.back().timestamp - imu.front().timestamp) : 200.0;
-    glue::RigBagWriter bag(out, glue::RigTopics(), CameraModel(cam.intrinsics), cam.T_b_c, noise, imu_rate,
+    glue::RigTopics topics;
+    if (euroc_topics) {
+      topics.imu = "/imu0";
+      topics.image = "/cam0/image_raw";
+      topics.camera_info = "/cam0/camera_info";
+    }
+    glue::RigBagWriter bag(out, topics, CameraModel(cam.intrinsics), cam.T_b_c, noise, imu_rate,
                            ros::Time(std::max(t0, imu.front().timestamp)));
     size_t n_imu = 0, n_img = 0, n_gt = 0, k = 0;
     for (const auto& img : images) {

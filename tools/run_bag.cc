@@ -25,6 +25,7 @@
 #include "vi_ekf_slam/eval/tum_io.h"
 #include "vi_ekf_slam/ros/bag_io.h"
 #include "vi_ekf_slam/ros/bag_replay.h"
+#include "vi_ekf_slam/ros/console_progress.h"
 #include "cli.h"
 
 using namespace vi_ekf_slam;
@@ -261,11 +262,26 @@ nlohmann::ordered_json extrinsicReport(const EkfSlam& f) {
           {"moved_m", (T.p_b_c - T0.p_b_c).norm()}};
 }
 
+/// Throws when no image could be used: a camera that does not fit the bag's images (size,
+/// encoding) or no image on the topic read must not end as an empty trajectory and exit 0.
+void checkImagesUsed(const glue::EkfSlamProcessor& processor, const glue::InputTopics& topics) {
+  const glue::InputCounters& c = processor.counters();
+  if (c.images_received == 0) throw std::runtime_error("no image on " + topics.image + " (" + topics.image_why + ")");
+  const long unusable = c.images_bad_encoding + c.images_no_camera;
+  if (unusable < c.images_received) return;
+  std::ostringstream m;
+  m << "none of the " << c.images_received << " images on " << topics.image << " could be used ("
+    << c.images_bad_encoding << " of an encoding the node does not read, " << c.images_no_camera
+    << " without a camera calibration that fits them): " << processor.lastProblem()
+    << ". Check the rig's camera (camera_resolution, intrinsics) against the bag's images.";
+  throw std::runtime_error(m.str());
+}
+
 /// One mechanization over the bag: its trajectory, trace, health (into *health) and, with ground
 /// truth, its metrics (into *results).
 void runOne(const Options& o, const std::string& mechanization, const glue::InputBagInfo& info,
-            const glue::InputTopics& topics, const std::vector<Reference>& refs, eval::Report* health,
-            std::vector<std::pair<std::string, eval::RunMetrics>>* results) {
+            const glue::InputTopics& topics, const std::vector<Reference>& refs, glue::ConsoleBesideProgress& console,
+            eval::Report* health, std::vector<std::pair<std::string, eval::RunMetrics>>* results) {
   const glue::NodeParams params = nodeParams(o, mechanization);
   const std::string name = toString(params.filter.mechanization);
   glue::RecordingSink sink;
@@ -274,6 +290,7 @@ void runOne(const Options& o, const std::string& mechanization, const glue::Inpu
   if (o.segments) sink.processor = &processor;
   const double bag_s = info.end - info.start;
   eval::Progress progress(name, bag_s);  // on a terminal only
+  console.follow(&progress);
   std::vector<double> resets = o.reset_at_s;
   std::sort(resets.begin(), resets.end(), std::greater<>());  // the next one last
   const double wall = glue::replayBag(o.bag, topics, processor, tf, [&](double done, double) {
@@ -284,6 +301,8 @@ void runOne(const Options& o, const std::string& mechanization, const glue::Inpu
     }
   });
   progress.finish();
+  console.follow(nullptr);
+  checkImagesUsed(processor, topics);
   if (o.save_map) {
     std::string message;
     const bool saved = processor.saveMap(&message);
@@ -347,6 +366,32 @@ std::vector<std::pair<std::string, eval::RunMetrics>> evaluateRecordings(const O
   return results;
 }
 
+/// The comparisons with --reference of every run, one line each, after the tables.
+void printReferenceComparisons(const eval::Report& health) {
+  bool first = true;
+  for (const auto& item : health.runs.rows.items()) {
+    const std::string& run = item.key();
+    const nlohmann::ordered_json& row = item.value();
+    if (!row.contains("references")) continue;
+    if (first) std::cout << "\nAgainst the references (position and rotation RMSE after alignment):\n";
+    first = false;
+    for (const auto& r : row["references"]) {
+      std::cout << "  " << run << " vs " << r.value("file", std::string()) << ": ";
+      if (r.contains("error")) {
+        std::cout << "not compared: " << r["error"].template get<std::string>() << "\n";
+        continue;
+      }
+      char from[48] = "";
+      if (r.contains("from_s")) std::snprintf(from, sizeof(from), ", from %g s", r["from_s"].template get<double>());
+      char line[200];
+      std::snprintf(line, sizeof(line), "%s, %d poses%s, %.3f m, %.2f deg\n",
+                    r.value("alignment", std::string()).c_str(), r.value("matched", 0), from,
+                    r.value("position_rmse_m", 0.0), r.value("rotation_rmse_deg", 0.0));
+      std::cout << line;
+    }
+  }
+}
+
 /// health.json / health.md and, with ground truth, summary.json / summary.md, printed too.
 void writeReports(const Options& o, eval::Report health,
                   const std::vector<std::pair<std::string, eval::RunMetrics>>& results) {
@@ -360,6 +405,9 @@ void writeReports(const Options& o, eval::Report health,
     std::cout << "\n" << md.rdbuf();
   } else {
     fs::remove(o.out + "/summary.json");  // a stale one from an earlier run with ground truth
+  }
+  printReferenceComparisons(health);
+  if (results.empty() && o.references.empty()) {
     std::cout << "\nthe bag has no ground truth (" << glue::RigTopics().ground_truth
               << "): no ATE or NEES; use --reference FILE.tum to compare with a trajectory\n";
   }
@@ -383,7 +431,8 @@ void plot(const std::string& out) {
 }  // namespace
 
 int main(int argc, char** argv) {
-  ros::Time::init();  // no master: wall time for the (throttled) log messages only
+  ros::Time::init();                    // no master: wall time for the (throttled) log messages only
+  glue::ConsoleBesideProgress console;  // log lines off the progress line, in order with stdout
   Options o;
   parseArguments(argc, argv, &o);
   // Exit 2: the command line does not fit (options, references, topics); 1: the run failed.
@@ -407,8 +456,14 @@ int main(int argc, char** argv) {
     if (o.recorded.empty()) {
       // The rig's topics where the bag has them.
       const glue::NodeOptions n = nodeParams(o, "").node;
-      const glue::InputTopics rig_topics{n.imu_topic, n.image_topic, n.camera_info_topic};
+      glue::InputTopics rig_topics;
+      rig_topics.imu = n.imu_topic;
+      rig_topics.image = n.image_topic;
+      rig_topics.camera_info = n.camera_info_topic;
       topics = glue::chooseInputTopics(o.bag, o.imu_topic, o.image_topic, o.camera_info_topic, &rig_topics);
+      std::printf("reading imu %s (%s), image %s (%s), camera_info %s (%s)\n", topics.imu.c_str(),
+                  topics.imu_why.c_str(), topics.image.c_str(), topics.image_why.c_str(),
+                  topics.camera_info.empty() ? "-" : topics.camera_info.c_str(), topics.camera_info_why.c_str());
     }
   } catch (const std::exception& e) {
     std::cerr << "error: " << e.what() << "\n";
@@ -423,7 +478,7 @@ int main(int argc, char** argv) {
     std::vector<std::string> mechanizations = {o.mechanization};
     if (o.mechanization == "all") mechanizations = {"world_centric", "sensor_centric", "sensor_centric_composition"};
     if (!o.recorded.empty()) mechanizations.clear();
-    for (const std::string& m : mechanizations) runOne(o, m, info, topics, refs, &health, &results);
+    for (const std::string& m : mechanizations) runOne(o, m, info, topics, refs, console, &health, &results);
     fs::create_directories(o.out);
     writeReports(o, health, results);
   } catch (const std::exception& e) {

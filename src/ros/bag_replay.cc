@@ -4,6 +4,7 @@
 #include <chrono>
 #include <cmath>
 #include <iostream>
+#include <tuple>
 
 #include <cv_bridge/cv_bridge.h>
 #include <rosbag/bag.h>
@@ -71,8 +72,8 @@ void RecordingSink::status(const vi_ekf_slam::FilterStatus& s) {
   trace.push_back(x);
 }
 
-void RecordingSink::event(const std::string& text) {
-  events.push_back({poses.empty() ? std::nan("") : poses.back().t, text});
+void RecordingSink::event(const std::string& text, double t_s) {
+  events.push_back({t_s, text});
   if (text.rfind("reset", 0) == 0) {
     ++resets;
     map.clear();  // the new filter maps anew
@@ -86,38 +87,53 @@ InputTopics chooseInputTopics(const std::string& bag_path, const std::optional<s
   rosbag::View view(bag);
   std::map<std::string, std::string> types;  // topic -> datatype
   for (const rosbag::ConnectionInfo* c : view.getConnections()) types[c->topic] = c->datatype;
+  // The topic and why it was chosen.
   auto choose = [&](const std::string& option, const std::optional<std::string>& requested,
-                    const std::vector<std::string>& accepted, const std::string& preferred_topic) {
+                    const std::vector<std::string>& accepted, const std::string& parameter,
+                    std::string preferred_topic) -> std::pair<std::string, std::string> {
     std::vector<std::string> found;
     for (const auto& [topic, type] : types) {
       if (std::find(accepted.begin(), accepted.end(), type) != accepted.end()) found.push_back(topic);
     }
     std::string list;
     for (const auto& t : found) list += " " + t + " (" + types[t] + ")";
-    if (!requested && !preferred_topic.empty() && types.count(preferred_topic)) return preferred_topic;
     if (requested) {
       if (std::find(found.begin(), found.end(), *requested) == found.end()) {
         throw std::runtime_error(option + " " + *requested + " is not a topic of type " + accepted.front() +
                                  " in the bag; it has:" + (list.empty() ? std::string(" none") : list));
       }
-      return *requested;
+      return {*requested, "given with " + option};
     }
-    if (found.size() != 1) {
-      throw std::runtime_error("the bag has " + std::to_string(found.size()) + " topics of type " + accepted.front() +
-                               (list.empty() ? std::string("") : ":" + list) + "; choose one with " + option);
+    // The node's default names are relative: as a node at the root resolves them.
+    const bool relative = !preferred_topic.empty() && preferred_topic.front() != '/';
+    if (relative) preferred_topic = "/" + preferred_topic;
+    const bool listed = std::find(found.begin(), found.end(), preferred_topic) != found.end();
+    if (listed) return {preferred_topic, "the parameters' " + parameter};
+    // A topic the parameters name (a rig file's) that the bag lacks is said, not passed over.
+    const std::string missing =
+        !preferred_topic.empty() && !relative ? parameter + " " + preferred_topic + " is not in the bag" : "";
+    const std::string prefix = missing.empty() ? std::string() : missing + ", and ";
+    if (found.empty()) throw std::runtime_error(prefix + "the bag has no " + accepted.front() + " topic");
+    if (found.size() > 1) {
+      throw std::runtime_error(prefix + "the bag has " + std::to_string(found.size()) + " topics of type " +
+                               accepted.front() + ":" + list + "; choose one with " + option);
     }
-    return found.front();
+    return {found.front(),
+            "the bag's only " + accepted.front() + " topic" + (missing.empty() ? std::string() : "; " + missing)};
   };
   InputTopics t;
   const InputTopics none;
   const InputTopics& pref = preferred ? *preferred : none;
-  t.imu = choose("--imu-topic", imu, {"sensor_msgs/Imu"}, pref.imu);
-  t.image = choose("--image-topic", image, {"sensor_msgs/Image", "sensor_msgs/CompressedImage"}, pref.image);
+  std::tie(t.imu, t.imu_why) = choose("--imu-topic", imu, {"sensor_msgs/Imu"}, "imu_topic", pref.imu);
+  std::tie(t.image, t.image_why) =
+      choose("--image-topic", image, {"sensor_msgs/Image", "sensor_msgs/CompressedImage"}, "image_topic", pref.image);
   // camera_info is optional (camera_calibration_file may give the intrinsics instead).
   try {
-    t.camera_info = choose("--camera-info-topic", camera_info, {"sensor_msgs/CameraInfo"}, pref.camera_info);
-  } catch (const std::exception&) {
+    std::tie(t.camera_info, t.camera_info_why) =
+        choose("--camera-info-topic", camera_info, {"sensor_msgs/CameraInfo"}, "camera_info_topic", pref.camera_info);
+  } catch (const std::exception& e) {
     if (camera_info) throw;
+    t.camera_info_why = std::string("none read (") + e.what() + "): the intrinsics come from the parameters";
   }
   return t;
 }

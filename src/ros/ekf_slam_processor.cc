@@ -73,6 +73,13 @@ void EkfSlamProcessor::reportProblem(const std::string& what) {
   last_problem_ = what;
 }
 
+void EkfSlamProcessor::event(const std::string& text) { sink_.event(text, eventTime()); }
+
+double EkfSlamProcessor::eventTime() const {
+  if (pipeline_->hasCamera() && pipeline_->filter().initialized()) return pipeline_->filter().state().timestamp;
+  return latest_imu_t_;
+}
+
 void EkfSlamProcessor::startOver(const std::string& reason) {
   ROS_WARN_STREAM("vi_ekf_slam: reset: " << reason);
   if (tracker_) tracker_->reset();
@@ -81,7 +88,7 @@ void EkfSlamProcessor::startOver(const std::string& reason) {
   last_processed_t_.reset();
   frames_.filterRestarted();
   ++counters_.resets;
-  sink_.event("reset: " + reason);
+  event("reset: " + reason);
 }
 
 void EkfSlamProcessor::reset(const std::string& reason) {
@@ -110,7 +117,7 @@ std::string EkfSlamProcessor::reconfigure(const EkfSlamReconfigureConfig& config
   if (before != params_.filter.mechanization) {
     ROS_INFO("vi_ekf_slam: mechanization %s -> %s (state and map converted)", toString(before).c_str(),
              toString(params_.filter.mechanization).c_str());
-    sink_.event("mechanization: " + toString(params_.filter.mechanization));
+    event("mechanization: " + toString(params_.filter.mechanization));
   }
   return "";
 }
@@ -134,7 +141,7 @@ void EkfSlamProcessor::cameraInfo(const sensor_msgs::CameraInfo& msg) {
     births_.clear();
     frames_.filterRestarted();
     ++counters_.resets;
-    sink_.event("reset: camera calibration changed");
+    event("reset: camera calibration changed");
   }
 }
 
@@ -185,6 +192,7 @@ void EkfSlamProcessor::imu(const sensor_msgs::Imu& msg) {
     reportProblem("IMU gap of " + std::to_string(*gap) + " s");
   }
   last_gyro_ = d->wm;
+  latest_imu_t_ = d->timestamp;
   if (body_frame_.empty()) {
     body_frame_ = !msg.header.frame_id.empty() ? msg.header.frame_id : "imu";
     ROS_INFO("vi_ekf_slam: IMU frame '%s' (the IMU messages' frame_id%s)", body_frame_.c_str(),
@@ -275,7 +283,7 @@ void EkfSlamProcessor::started(StartKind kind, const std::string& event, EkfSlam
   }
   // A run that defines the kept map (it was empty): the map's frame is this world's place in odom.
   if (pipeline_->inMap()) frames_.worldIsMap();
-  sink_.event(event);
+  this->event(event);
 }
 
 void EkfSlamProcessor::waiting(const std::string& why) { reportProblem(why); }
@@ -312,7 +320,7 @@ void EkfSlamProcessor::relocalized(const Relocalization& r, const std::string& e
   Eigen::Isometry3d C = Eigen::Isometry3d::Identity();
   C.linear() = zUpWorldFromNav().toRotationMatrix();
   frames_.relocalized(C * r.T_m_n * C.inverse(), !params_.node.map_frame.empty());
-  sink_.event(event);
+  this->event(event);
 }
 
 void EkfSlamProcessor::lost(const std::string& why) {

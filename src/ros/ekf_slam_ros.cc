@@ -9,6 +9,12 @@
 
 namespace vi_ekf_slam::glue {
 
+namespace {
+/// An input silent this long while the node runs is named with its topic [s]: longer than any
+/// driver's start, shorter than a user's patience.
+constexpr double kInputSilenceS = 5.0;
+}  // namespace
+
 EkfSlamRos::EkfSlamRos(ros::NodeHandle nh, ros::NodeHandle pnh) : nh_(nh), pnh_(pnh), it_(nh), updater_(nh, pnh) {
   NodeParams params;
   const std::string err = loadParams(NodeHandleParams(pnh_), &params);
@@ -97,31 +103,58 @@ EkfSlamRos::EkfSlamRos(ros::NodeHandle nh, ros::NodeHandle pnh) : nh_(nh), pnh_(
     });
   }
 
+  // The topics as resolved in the node's namespace, remaps applied: what the log and the
+  // diagnostics name when an input stays silent.
+  const std::string imu_topic = nh_.resolveName(params.node.imu_topic);
+  const std::string info_topic = nh_.resolveName(params.node.camera_info_topic);
+  // Resolved (and remapped) before image_transport sees it: it appends "/compressed" to the name it
+  // is given, and a remap of "image" would not reach "image/compressed" otherwise.
+  const std::string image_topic = nh_.resolveName(params.node.image_topic);
+  input_watch_ = std::make_unique<InputWatch>(
+      std::vector<InputWatch::Input>{{"imu", imu_topic, "remap imu:=YOUR_TOPIC or set ~imu_topic"},
+                                     {"image", image_topic, "remap image:=YOUR_TOPIC or set ~image_topic"},
+                                     {"camera_info", info_topic,
+                                      "remap camera_info:=YOUR_TOPIC, set ~camera_info_topic, or give the "
+                                      "intrinsics in the rig file"}},
+      kInputSilenceS, ros::WallTime::now().toSec());
   imu_sub_ = nh_.subscribe<sensor_msgs::Imu>(
-      params.node.imu_topic, 2000,
+      imu_topic, 2000,
       [this](const sensor_msgs::ImuConstPtr& m) {
         std::lock_guard<std::mutex> lock(mutex_);
+        input_watch_->arrived(kImuInput, ros::WallTime::now().toSec());
         imu_rate_->tick();
         processor_->imu(*m);
       },
       ros::VoidConstPtr(), ros::TransportHints().tcpNoDelay());
-  info_sub_ = nh_.subscribe<sensor_msgs::CameraInfo>(params.node.camera_info_topic, 5,
-                                                     [this](const sensor_msgs::CameraInfoConstPtr& m) {
-                                                       std::lock_guard<std::mutex> lock(mutex_);
-                                                       processor_->cameraInfo(*m);
-                                                     });
-  // Resolve (and remap) the base topic first: image_transport appends "/compressed" to the name it
-  // is given, and a remap of "image" would not reach "image/compressed" otherwise.
+  info_sub_ = nh_.subscribe<sensor_msgs::CameraInfo>(info_topic, 5, [this](const sensor_msgs::CameraInfoConstPtr& m) {
+    std::lock_guard<std::mutex> lock(mutex_);
+    input_watch_->arrived(kCameraInfoInput, ros::WallTime::now().toSec());
+    processor_->cameraInfo(*m);
+  });
   image_sub_ = it_.subscribe(
-      nh_.resolveName(params.node.image_topic), 5,
+      image_topic, 5,
       [this](const sensor_msgs::ImageConstPtr& m) {
         std::lock_guard<std::mutex> lock(mutex_);
+        input_watch_->arrived(kImageInput, ros::WallTime::now().toSec());
         image_rate_->tick();
         processor_->image(*m);
       },
       ros::VoidPtr(), imageTransportHints());
   diag_timer_ = nh_.createTimer(ros::Duration(0.25), &EkfSlamRos::diagnosticsTimer, this);
-  ROS_INFO("vi_ekf_slam: waiting for imu, image (%s transport) and camera_info", image_sub_.getTransport().c_str());
+  // On the wall clock: with /use_sim_time and no bag playing yet, ROS timers do not fire, and that
+  // is when a user most needs to know which topic the node listens to.
+  watch_timer_ = nh_.createWallTimer(ros::WallDuration(1.0), [this](const ros::WallTimerEvent&) {
+    std::lock_guard<std::mutex> lock(mutex_);
+    const std::string waiting = waitingOn();
+    const double now = ros::WallTime::now().toSec();
+    // Every 10 s of wall time (ROS_WARN_THROTTLE counts ROS time, which stands still then).
+    if (!waiting.empty() && now - last_waiting_log_s_ >= 10.0) {
+      ROS_WARN_STREAM("vi_ekf_slam: " << waiting);
+      last_waiting_log_s_ = now;
+    }
+  });
+  ROS_INFO("vi_ekf_slam: inputs: imu %s, image %s (%s transport), camera_info %s", imu_topic.c_str(),
+           image_sub_.getTopic().c_str(), image_sub_.getTransport().c_str(), info_topic.c_str());
 }
 
 image_transport::TransportHints EkfSlamRos::imageTransportHints() const {
@@ -178,7 +211,7 @@ void EkfSlamRos::tracksImage(const std_msgs::Header& header, const cv::Mat& bgr)
 
 void EkfSlamRos::status(const vi_ekf_slam::FilterStatus& s) { status_pub_.publish(s); }
 
-void EkfSlamRos::event(const std::string& text) {
+void EkfSlamRos::event(const std::string& text, double /*t_s*/) {
   std_msgs::String e;
   e.data = text;
   events_pub_.publish(e);
@@ -220,10 +253,21 @@ void EkfSlamRos::diagnosticsTimer(const ros::TimerEvent&) {
   updater_.update();
 }
 
+std::string EkfSlamRos::waitingOn() {
+  input_watch_->setNeeded(kCameraInfoInput, processor_->needsCameraInfo());
+  return input_watch_->waitingOn(ros::WallTime::now().toSec());
+}
+
 void EkfSlamRos::diagnoseInputs(diagnostic_updater::DiagnosticStatusWrapper& stat) {
   const InputCounters& c = processor_->counters();
   const auto [level, summary] = processor_->inputsHealth();
-  stat.summary(static_cast<unsigned char>(level), summary);
+  const std::string waiting = waitingOn();
+  if (!waiting.empty() && level <= diagnostic_msgs::DiagnosticStatus::WARN) {
+    stat.summary(diagnostic_msgs::DiagnosticStatus::WARN, waiting);
+  } else {
+    stat.summary(static_cast<unsigned char>(level), summary);
+  }
+  for (const InputWatch::Input& in : input_watch_->inputs()) stat.add(in.name + " topic", in.topic);
   stat.add("imu received", c.imu_received);
   stat.add("imu dropped: non-finite", c.imu_nonfinite);
   stat.add("imu dropped: stale stamp", c.imu_stale);

@@ -83,11 +83,14 @@ std::vector<ParamSpec> makeTable() {
   const bool dyn = true;
   return {
       // --- topics
-      field("imu_topic", "topics", VI_FIELD(p.node.imu_topic), "", "sensor_msgs/Imu"),
+      field("imu_topic", "topics", VI_FIELD(p.node.imu_topic), "",
+            "sensor_msgs/Imu (the default follows a remap imu:=YOUR_TOPIC)"),
       field("image_topic", "topics", VI_FIELD(p.node.image_topic), "",
-            "image_transport base topic (sensor_msgs/Image, or <topic>/compressed)"),
+            "image_transport base topic, sensor_msgs/Image or <topic>/compressed (the default follows a remap "
+            "image:=YOUR_TOPIC)"),
       field("camera_info_topic", "topics", VI_FIELD(p.node.camera_info_topic), "",
-            "sensor_msgs/CameraInfo (optional when the intrinsics come from a file)"),
+            "sensor_msgs/CameraInfo, optional when the intrinsics come from a file (the default follows a "
+            "remap camera_info:=YOUR_TOPIC)"),
       // --- frames
       choice("publish_tf", "frames", VI_FIELD(p.node.publish_tf),
              "which TF the node broadcasts, and the frames of its outputs", false,

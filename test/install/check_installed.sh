@@ -26,7 +26,8 @@ run_installed "$bin/vi_ekf_slam_make_bag --out short.bag --duration 5 --standing
 run_installed "strace -f -qq -s 4096 -e trace=open,openat,execve -o run_bag.trace \
   $bin/vi_ekf_slam_run_bag --bag short.bag --out offline > run_bag.log 2>&1" || { cat "$tmp/run_bag.log"; exit 1; }
 run_installed "strace -f -qq -s 4096 -e trace=open,openat,execve -o launch.trace \
-  roslaunch -p $port vi_ekf_slam replay.launch bag:=$tmp/short.bag delay:=3 record:=$tmp/live.bag > launch.log 2>&1" \
+  roslaunch -p $port vi_ekf_slam replay.launch bag:=$tmp/short.bag delay:=3 record:=$tmp/live.bag \
+  imu_topic:=/imu image_topic:=/camera/image_raw camera_info_topic:=/camera/camera_info > launch.log 2>&1" \
   || { tail -n 40 "$tmp/launch.log"; exit 1; }
 
 fail=0

@@ -2,7 +2,9 @@
 """rostest: replays a bag with `rosbag play --clock` into the running filter and checks the result.
 
 Private parameters:
-  source            euroc_micro (real EuRoC frames, ASL -> bag) | rendered (a simulated walk)
+  source            euroc_micro (real EuRoC frames, ASL -> bag) | euroc_micro_driver (the same on the
+                    EuRoC driver's topics /imu0, /cam0/...) | rendered (a simulated walk)
+  outputs           the namespace of the node's outputs (default /vi_ekf_slam)
   duration_s        rendered: seconds of walking after the 2 s standing start
   max_final_error_m final position error after registering the first pose [m]
   min_tracks        minimum mean number of tracks per frame
@@ -11,6 +13,7 @@ Private parameters:
 """
 import math
 import os
+import shutil
 import subprocess
 import sys
 import tempfile
@@ -47,18 +50,21 @@ def register(est0, gt0):
 class ReplayCheck(unittest.TestCase):
     def setUp(self):
         self.odom, self.truth, self.status = [], {}, []
-        rospy.Subscriber("/vi_ekf_slam/odom", Odometry, lambda m: self.odom.append(m), queue_size=1000)
-        rospy.Subscriber("/vi_ekf_slam/status", FilterStatus, lambda m: self.status.append(m), queue_size=1000)
+        ns = rospy.get_param("~outputs", "/vi_ekf_slam").rstrip("/")
+        rospy.Subscriber(ns + "/odom", Odometry, lambda m: self.odom.append(m), queue_size=1000)
+        rospy.Subscriber(ns + "/status", FilterStatus, lambda m: self.status.append(m), queue_size=1000)
         rospy.Subscriber("/ground_truth/pose", PoseStamped,
                          lambda m: self.truth.__setitem__(round(m.header.stamp.to_sec(), 3), m.pose), queue_size=1000)
 
     def make_bag(self, source, path):
-        if source == "euroc_micro":
+        if source.startswith("euroc_micro"):
             data = os.environ.get("DATA_DIR", "")
             asl = os.path.join(data, "euroc_v1_01_micro", "mav0")
             if not data or not os.path.isdir(asl):
                 self.skipTest("DATA_DIR with euroc_v1_01_micro not available")
             cmd = ["rosrun", PKG, "vi_ekf_slam_asl_to_bag", "--asl", asl, "--out", path]
+            if source == "euroc_micro_driver":
+                cmd.append("--euroc-topics")
         else:
             duration = str(rospy.get_param("~duration_s", 8.0))
             cmd = ["rosrun", PKG, "vi_ekf_slam_make_bag", "--out", path, "--duration", duration]
@@ -66,7 +72,9 @@ class ReplayCheck(unittest.TestCase):
 
     def test_replay(self):
         source = rospy.get_param("~source")
-        tmp = tempfile.mkdtemp()
+        # Removed when the check passes, kept for inspection when it fails.
+        tmp = tempfile.mkdtemp(prefix="vi_ekf_slam_replay_")
+        print("replay_check: working in %s" % tmp)
         bag = os.path.join(tmp, "input.bag")
         self.make_bag(source, bag)
         # The first messages must reach the node whatever the machine's load (a publish before the
@@ -129,6 +137,7 @@ class ReplayCheck(unittest.TestCase):
             self.assertGreater(len(diffs), 0.9 * len(self.odom), "offline and live stamps do not match")
             print("live vs offline: %d common poses, largest difference %.6f m" % (len(diffs), max(diffs)))
             self.assertLess(max(diffs), rospy.get_param("~max_offline_diff_m"))
+        shutil.rmtree(tmp, ignore_errors=True)
 
 
 if __name__ == "__main__":

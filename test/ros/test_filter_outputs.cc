@@ -8,6 +8,7 @@
 //   diag_nonzero        comma-separated keys of the "inputs" diagnostics that must end > 0
 //   diag_zero           comma-separated keys of the "inputs" diagnostics that must stay 0
 //   min_diag_level      the inputs diagnostics must reach this level once (0 OK, 1 WARN, 2 ERROR)
+//   expect_inputs_summary a substring the inputs diagnostics' summary must show once
 //   expect_event        a substring that must appear on the events topic
 //   min_resets          minimum "resets" reported by the status
 //   call_reset_at_s     call the reset service this long after the first odometry [s]; <0: never
@@ -30,6 +31,7 @@
 #include <std_srvs/Trigger.h>
 
 #include <Eigen/Geometry>
+#include <algorithm>
 #include <map>
 #include <mutex>
 #include <sstream>
@@ -54,6 +56,7 @@ struct Recorder {
   std::vector<std::string> events;
   std::map<std::string, double> inputs;  // last values of the "inputs" diagnostics
   int max_inputs_level = 0;
+  std::vector<std::string> inputs_summaries;  // every distinct summary of the "inputs" diagnostics
   ros::Time last_diag;
 };
 
@@ -64,7 +67,8 @@ TEST(FilterNode, BehavesOnThisInputStream) {
   double listen_s = 15, min_hz = 15, max_err = 0, reset_at = -1, switch_at = -1, max_reinit = 0;
   bool expect_odom = true;
   int min_level = 0, min_resets = 0;
-  std::string diag_nonzero, diag_zero, expect_event, switch_to = "world_centric";
+  std::string diag_nonzero, diag_zero, expect_event, switch_to = "world_centric", expect_summary;
+  pnh.param("expect_inputs_summary", expect_summary, expect_summary);
   pnh.param("listen_s", listen_s, listen_s);
   pnh.param("expect_odom", expect_odom, expect_odom);
   pnh.param("min_odom_hz", min_hz, min_hz);
@@ -111,6 +115,9 @@ TEST(FilterNode, BehavesOnThisInputStream) {
         for (const auto& st : m->status) {
           if (st.name.find("inputs") == std::string::npos) continue;
           rec.max_inputs_level = std::max<int>(rec.max_inputs_level, st.level);
+          if (std::find(rec.inputs_summaries.begin(), rec.inputs_summaries.end(), st.message) ==
+              rec.inputs_summaries.end())
+            rec.inputs_summaries.push_back(st.message);
           rec.last_diag = ros::Time::now();
           for (const auto& kv : st.values) {
             try {
@@ -254,6 +261,13 @@ TEST(FilterNode, BehavesOnThisInputStream) {
     EXPECT_EQ(rec.inputs[key], 0.0) << "diagnostics '" << key << "' should have stayed 0";
   }
   EXPECT_GE(rec.max_inputs_level, min_level) << "inputs diagnostics never reached level " << min_level;
+  if (!expect_summary.empty()) {
+    std::string seen;
+    for (const auto& s : rec.inputs_summaries) seen += "\n  " + s;
+    EXPECT_TRUE(std::any_of(rec.inputs_summaries.begin(), rec.inputs_summaries.end(),
+                            [&](const std::string& s) { return s.find(expect_summary) != std::string::npos; }))
+        << "the inputs diagnostics never said '" << expect_summary << "'; they said:" << seen;
+  }
   if (!expect_event.empty()) {
     bool seen = false;
     for (const auto& e : rec.events) seen = seen || e.find(expect_event) != std::string::npos;

@@ -27,7 +27,7 @@ struct OdomRecorder : OutputSink {
   bool wantsLandmarks() const override { return false; }
   void landmarks(const std::vector<LandmarkOutput>&, const ros::Time&) override {}
   void status(const vi_ekf_slam::FilterStatus&) override {}
-  void event(const std::string& e) override { events.push_back(e); }
+  void event(const std::string& e, double) override { events.push_back(e); }
 };
 
 /// The built-in walk's first seconds, standing first when standing_s > 0 (the start at rest) or

@@ -17,7 +17,7 @@ class NullSink : public OutputSink {
   bool wantsLandmarks() const override { return false; }
   void landmarks(const std::vector<LandmarkOutput>&, const ros::Time&) override {}
   void status(const vi_ekf_slam::FilterStatus&) override {}
-  void event(const std::string&) override {}
+  void event(const std::string&, double) override {}
 };
 
 sensor_msgs::Imu imuMsg(double t, const std::string& frame) {

@@ -30,7 +30,7 @@ struct Recorder : OutputSink {
   void odometry(const nav_msgs::Odometry& o) override { odom.push_back(o); }
   void landmarks(const std::vector<LandmarkOutput>&, const ros::Time&) override { ++clouds; }
   void status(const vi_ekf_slam::FilterStatus& s) override { statuses.push_back(s); }
-  void event(const std::string& e) override { events.push_back(e); }
+  void event(const std::string& e, double) override { events.push_back(e); }
 };
 
 /// What a run must show (the former rostest parameters).

@@ -48,7 +48,7 @@ class KeepingSink : public OutputSink {
   }
   void landmarks(const std::vector<LandmarkOutput>&, const ros::Time&) override {}
   void status(const vi_ekf_slam::FilterStatus& s) override { time_offsets.push_back(s.time_offset_s); }
-  void event(const std::string& text) override { events.push_back(text); }
+  void event(const std::string& text, double) override { events.push_back(text); }
 };
 
 sensor_msgs::Imu imuMsg(const ImuData& d) {

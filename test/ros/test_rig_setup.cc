@@ -242,9 +242,13 @@ TEST(RigPresets, EachLoadsAndValidatesOnTopOfTheDefaults) {
   EXPECT_EQ(rigFile("/my/rig.yaml", kSource), "/my/rig.yaml");
 }
 
+/// A topic name as a node at the root resolves it (the node's defaults are relative).
+std::string atRoot(const std::string& topic) { return topic.rfind('/', 0) == 0 ? topic : "/" + topic; }
+
 /// A synthetic walk written as a bag under the preset's topic names and frames: the camera is the
 /// preset's where it holds intrinsics and T_b_c; /tf_static has IMU <- camera and, for a driver
 /// tree (base_frame set), base <- IMU.
+
 std::string presetBag(const std::string& name, const NodeParams& p) {
   test::RigOptions o;
   o.duration_s = 7.0;
@@ -277,9 +281,9 @@ std::string presetBag(const std::string& name, const NodeParams& p) {
   bag.write("/tf_static", ros::Time(100.0), tf);
   for (const test::RigMessage& m : s.messages) {
     const ros::Time t(100.0 + m.play_t);
-    if (auto* imu = std::get_if<sensor_msgs::Imu>(&m.msg)) bag.write(p.node.imu_topic, t, *imu);
-    if (auto* img = std::get_if<sensor_msgs::Image>(&m.msg)) bag.write(p.node.image_topic, t, *img);
-    if (auto* ci = std::get_if<sensor_msgs::CameraInfo>(&m.msg)) bag.write(p.node.camera_info_topic, t, *ci);
+    if (auto* imu = std::get_if<sensor_msgs::Imu>(&m.msg)) bag.write(atRoot(p.node.imu_topic), t, *imu);
+    if (auto* img = std::get_if<sensor_msgs::Image>(&m.msg)) bag.write(atRoot(p.node.image_topic), t, *img);
+    if (auto* ci = std::get_if<sensor_msgs::CameraInfo>(&m.msg)) bag.write(atRoot(p.node.camera_info_topic), t, *ci);
   }
   // Topics the preset does not use, as a real recording has them: the choice must not be ambiguous.
   sensor_msgs::Imu other;
@@ -297,10 +301,13 @@ TEST(RigPresets, ASyntheticBagWithEachPresetsTopicsAndFramesGivesOdometry) {
     NodeParams p = load(yaml);
     p.node.tune_allocator = false;
     const std::string bag = presetBag(name, p);
-    const InputTopics preferred{p.node.imu_topic, p.node.image_topic, p.node.camera_info_topic};
+    InputTopics preferred;
+    preferred.imu = p.node.imu_topic;
+    preferred.image = p.node.image_topic;
+    preferred.camera_info = p.node.camera_info_topic;
     const InputTopics topics = chooseInputTopics(bag, std::nullopt, std::nullopt, std::nullopt, &preferred);
-    EXPECT_EQ(topics.imu, p.node.imu_topic);
-    EXPECT_EQ(topics.image, p.node.image_topic);
+    EXPECT_EQ(topics.imu, atRoot(p.node.imu_topic)) << topics.imu_why;
+    EXPECT_EQ(topics.image, atRoot(p.node.image_topic)) << topics.image_why;
     RecordingSink sink;
     tf2::BufferCore tf;
     EkfSlamProcessor processor(p, sink, &tf);

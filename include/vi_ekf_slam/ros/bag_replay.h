@@ -23,7 +23,7 @@ namespace vi_ekf_slam::glue {
 class RecordingSink : public OutputSink {
  public:
   struct Event {
-    double t = 0.0;  ///< of the last pose before it (NaN before any) [s]
+    double t = 0.0;  ///< when it happened on the IMU clock (see OutputSink::event) [s]
     std::string text;
   };
   std::vector<eval::EstimatedPose> poses;
@@ -39,18 +39,20 @@ class RecordingSink : public OutputSink {
   void odometry(const nav_msgs::Odometry& o) override;
   void landmarks(const std::vector<LandmarkOutput>& lms, const ros::Time&) override;
   void status(const vi_ekf_slam::FilterStatus& s) override;
-  void event(const std::string& text) override;
+  void event(const std::string& text, double t_s) override;
 };
 
-/// The topics the processor is fed from.
+/// The topics the processor is fed from, and why each was chosen (for the user: a topic that was
+/// not the one asked for is said).
 struct InputTopics {
   std::string imu, image, camera_info;
+  std::string imu_why, image_why, camera_info_why;
 };
 
 /// The topics as requested (checked against the bag), else the preferred one where the bag has it
-/// (the node's imu_topic, image_topic, camera_info_topic), else the one topic of each type the bag
-/// holds; several, or none, is an error (std::runtime_error) that lists them. camera_info is
-/// optional.
+/// (the node's imu_topic, image_topic, camera_info_topic; a relative name is resolved as a node at
+/// the root would, "imu" as "/imu"), else the one topic of each type the bag holds; several, or
+/// none, is an error (std::runtime_error) that lists them. camera_info is optional.
 InputTopics chooseInputTopics(const std::string& bag_path, const std::optional<std::string>& imu,
                               const std::optional<std::string>& image, const std::optional<std::string>& camera_info,
                               const InputTopics* preferred = nullptr);

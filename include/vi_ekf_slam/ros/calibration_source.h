@@ -40,6 +40,8 @@ class CalibrationSource {
   /// missing. tf may be null when the extrinsic comes from the parameters.
   std::string ready(const std::string& image_frame, const std::string& imu_frame, const tf2::BufferCore* tf);
 
+  /// Intrinsics are known (from a file, or from a camera_info taken): camera_info is then optional.
+  bool hasIntrinsics() const { return intrinsics_.has_value(); }
   /// Valid once ready() returned "".
   const CameraIntrinsics& intrinsics() const { return *intrinsics_; }
   const CameraExtrinsics& extrinsics() const { return *extrinsics_; }

@@ -10,6 +10,7 @@
 #include <chrono>
 #include <deque>
 #include <functional>
+#include <limits>
 #include <memory>
 #include <optional>
 #include <sensor_msgs/CameraInfo.h>
@@ -67,7 +68,9 @@ class OutputSink {
   virtual bool wantsTracksImage() const { return false; }
   virtual void tracksImage(const std_msgs::Header& /*header*/, const cv::Mat& /*bgr*/) {}
   virtual void status(const vi_ekf_slam::FilterStatus& status) = 0;
-  virtual void event(const std::string& text) = 0;
+  /// t_s: when it happened on the IMU clock (the filter's time, else the latest IMU stamp; NaN
+  /// before any IMU sample) [s].
+  virtual void event(const std::string& text, double t_s) = 0;
 };
 
 class EkfSlamProcessor : private PipelineListener {
@@ -96,6 +99,8 @@ class EkfSlamProcessor : private PipelineListener {
   const InputCounters& counters() const { return counters_; }
   const std::string& lastProblem() const { return last_problem_; }
   std::string calibrationSummary() const { return calibration_.summary(); }
+  /// No intrinsics yet: images wait for a camera_info.
+  bool needsCameraInfo() const { return !calibration_.hasIntrinsics(); }
   /// The inputs' health for the diagnostics: level (diagnostic_msgs::DiagnosticStatus OK 0, WARN 1,
   /// ERROR 2: nothing usable arrives) and its summary.
   std::pair<int, std::string> inputsHealth() const;
@@ -136,6 +141,10 @@ class EkfSlamProcessor : private PipelineListener {
   /// base frame's transform is not known yet or a number is not finite.
   std::optional<nav_msgs::Odometry> odometryOf(const NavState& nav, const Vec3& w_b);
   void reportProblem(const std::string& what);
+  /// Tells the sink what happened, at eventTime().
+  void event(const std::string& text);
+  /// The filter's time while it runs, else the latest IMU stamp (NaN before any) [s].
+  double eventTime() const;
   /// Forgets what belongs to one run of the filter (tracks, births, stamps) and says why.
   void startOver(const std::string& reason);
 
@@ -158,7 +167,8 @@ class EkfSlamProcessor : private PipelineListener {
   std::shared_ptr<PendingImage> current_;  ///< the image the pipeline last asked to track
   std::unordered_map<std::int64_t, Birth> births_;
   Vec3 last_gyro_ = Vec3::Zero();
-  std::optional<double> last_processed_t_;  ///< stamp of the last processed image [s]
+  double latest_imu_t_ = std::numeric_limits<double>::quiet_NaN();  ///< [s]
+  std::optional<double> last_processed_t_;                          ///< stamp of the last processed image [s]
   InputCounters counters_;
   int last_tracks_ = 0;
   double last_update_ms_ = 0.0, last_tracker_ms_ = 0.0;

@@ -20,6 +20,7 @@
 
 #include "vi_ekf_slam/EkfSlamReconfigureConfig.h"
 #include "vi_ekf_slam/ros/ekf_slam_processor.h"
+#include "vi_ekf_slam/ros/input_watch.h"
 
 namespace vi_ekf_slam::glue {
 
@@ -37,10 +38,12 @@ class EkfSlamRos : public OutputSink {
   bool wantsTracksImage() const override { return tracks_pub_.getNumSubscribers() > 0; }
   void tracksImage(const std_msgs::Header& header, const cv::Mat& bgr) override;
   void status(const vi_ekf_slam::FilterStatus& status) override;
-  void event(const std::string& text) override;
+  void event(const std::string& text, double t_s) override;
 
  private:
   void diagnosticsTimer(const ros::TimerEvent&);
+  /// "" or which input the node waits on, by its resolved topic (logged, and in the diagnostics).
+  std::string waitingOn();
   /// ~image_transport (raw | compressed | any installed transport), with "compressed" served by
   /// this package's own plugin (src/ros/compressed_subscriber.cc).
   image_transport::TransportHints imageTransportHints() const;
@@ -65,6 +68,8 @@ class EkfSlamRos : public OutputSink {
   std::string tf_conflict_;  ///< see tfConflict()
   tf2_ros::StaticTransformBroadcaster static_broadcaster_;  ///< map_frame -> odom_frame
   std::unique_ptr<EkfSlamProcessor> processor_;
+  enum WatchedInput : size_t { kImuInput, kImageInput, kCameraInfoInput };
+  std::unique_ptr<InputWatch> input_watch_;  ///< on the wall clock: a paused replay waits on nothing
   image_transport::ImageTransport it_;
   image_transport::Subscriber image_sub_;
   image_transport::Publisher tracks_pub_;
@@ -73,6 +78,8 @@ class EkfSlamRos : public OutputSink {
   ros::ServiceServer reset_srv_;
   ros::ServiceServer save_map_srv_;  ///< ~save_map: the kept map to map_file
   ros::Timer diag_timer_;
+  ros::WallTimer watch_timer_;        ///< logs what the node waits on (waitingOn)
+  double last_waiting_log_s_ = -1e9;  ///< wall time of that log [s]
   nav_msgs::Path path_;
   diagnostic_updater::Updater updater_;
   boost::recursive_mutex reconfigure_mutex_;

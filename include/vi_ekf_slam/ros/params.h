@@ -19,9 +19,11 @@
 namespace vi_ekf_slam::glue {
 
 struct NodeOptions {
-  std::string imu_topic = "/imu";                         ///< sensor_msgs/Imu
-  std::string image_topic = "/camera/image_raw";          ///< image_transport base topic
-  std::string camera_info_topic = "/camera/camera_info";  ///< sensor_msgs/CameraInfo
+  // Relative names, resolved in the node's namespace: `image:=/cam0/image_raw` remaps them as it
+  // would any driver-agnostic node's; a rig file or launch argument names another topic instead.
+  std::string imu_topic = "imu";                  ///< sensor_msgs/Imu
+  std::string image_topic = "image";              ///< image_transport base topic
+  std::string camera_info_topic = "camera_info";  ///< sensor_msgs/CameraInfo
   /// What the outputs are expressed in and which TF is broadcast (see output_frames.h): odom
   /// (REP-105: odom_frame -> base_frame), none (the same frames, no TF), world (world_frame -> IMU).
   TfMode publish_tf = TfMode::kOdom;
