@@ -88,6 +88,8 @@ lint: build
 	@# package.xml declares exactly what CMake, the includes, the Python imports and the launch files use.
 	/usr/bin/python3 test/install/check_package_xml.py $(ROOT)
 	/usr/bin/python3 test/install/check_rviz_views.py $(ROOT)
+	@# roslaunch ignores unknown arguments: the documented commands name only declared ones.
+	/usr/bin/python3 test/install/check_readme_commands.py $(ROOT)
 	@clang-format --dry-run --Werror $(CXX_SOURCES) && echo "clang-format: clean"
 	@pyflakes3 $$(git ls-files '*.py' 2>/dev/null || find tools bench test -name '*.py') && echo "pyflakes: clean"
 	@# One clang-tidy per file, as many at once as there are cores (serially it took 2.5 min).

@@ -2,10 +2,12 @@
 // with the topics of a real rig (bag_io.h): camera_info from cam0/sensor.yaml, /tf_static from
 // its T_BS, IMU covariances from imu0/sensor.yaml, ground truth as /ground_truth/pose.
 //
-//   vi_ekf_slam_asl_to_bag --asl FOLDER/mav0 --out FILE [--imu-margin S] [--start S] [--euroc-topics]
+//   vi_ekf_slam_asl_to_bag --asl FOLDER/mav0 --out FILE [--imu-margin S] [--start S] [--duration S]
+//                          [--euroc-topics]
 // IMU samples outside the camera's time span (plus the margin, default 1 s) are left out, so a
 // short image sequence does not carry the whole IMU log. --start S cuts the recording S seconds
-// after its first image: images and IMU both begin there, as when a node is started mid-walk.
+// after its first image: images and IMU both begin there, as when a node is started mid-walk;
+// --duration S keeps S seconds of images from there.
 // --euroc-topics writes the official EuRoC bags' topics (/imu0, /cam0/image_raw) and
 // /cam0/camera_info, as a driver of that rig publishes them.
 #include <algorithm>
@@ -21,21 +23,25 @@ using namespace vi_ekf_slam;
 
 int main(int argc, char** argv) {
   std::string asl, out;
-  double margin = 1.0, start = 0.0;
+  double margin = 1.0, start = 0.0, duration = 0.0;
   bool euroc_topics = false;
   const std::string usage =
-      "vi_ekf_slam_asl_to_bag --asl FOLDER/mav0 --out FILE [--imu-margin S] [--start S] [--euroc-topics]";
+      "vi_ekf_slam_asl_to_bag --asl FOLDER/mav0 --out FILE [--imu-margin S] [--start S] [--duration S] "
+      "[--euroc-topics]";
   cli::po::options_description opts("options");
   opts.add_options()("asl", cli::po::value(&asl)->required(), "the ASL folder (mav0 with cam0, imu0)")(
       "out", cli::po::value(&out)->required(), "the bag to write")(
       "imu-margin", cli::po::value(&margin)->default_value(margin), "IMU kept around the images [s]")(
       "start", cli::po::value(&start)->default_value(start),
       "cut everything before this time after the first image [s] (images and IMU begin together)")(
+      "duration", cli::po::value(&duration)->default_value(duration),
+      "keep this many seconds of images from the start (0: all) [s]")(
       "euroc-topics", cli::po::bool_switch(&euroc_topics),
       "the EuRoC bags' topics /imu0, /cam0/image_raw (and /cam0/camera_info) instead of /imu, /camera/...");
   cli::parse(argc, argv, usage, "Converts an ASL/EuRoC folder into a bag with the topics of a real rig.", opts);
   if (!(margin >= 0.0)) cli::fail(usage, "--imu-margin must be >= 0");
   if (!(start >= 0.0)) cli::fail(usage, "--start must be >= 0");
+  if (!(duration >= 0.0)) cli::fail(usage, "--duration must be >= 0");
   try {
     const eval::AslCamera cam = eval::readAslCamera(asl + "/cam0/sensor.yaml");
     const ImuNoiseParams noise = eval::readAslImuNoise(asl + "/imu0/sensor.yaml");
@@ -44,6 +50,11 @@ int main(int argc, char** argv) {
       const double t_cut = images.front().t + start;
       images.erase(images.begin(),
                    std::find_if(images.begin(), images.end(), [&](const eval::AslImage& i) { return i.t >= t_cut; }));
+    }
+    if (duration > 0.0 && !images.empty()) {
+      const double t_end = images.front().t + duration;
+      images.erase(std::find_if(images.begin(), images.end(), [&](const eval::AslImage& i) { return i.t > t_end; }),
+                   images.end());
     }
     const std::vector<ImuData> imu = eval::readAslImu(asl + "/imu0/data.csv");
     std::vector<eval::AslState> gt;

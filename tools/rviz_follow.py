@@ -3,7 +3,7 @@
 pedestrian's scale) with its orbit centred on the frame the filter moves, the child frame of its
 first odometry (base_frame, or the IMU frame), or on --frame.
 
-usage: rviz_follow.py --config FILE.rviz [--frame NAME] [--odom-topic TOPIC]
+usage: rviz_follow.py --config FILE.rviz [--frame NAME|(odometry)] [--odom-topic TOPIC]
 """
 import argparse
 import os
@@ -22,10 +22,11 @@ def followed_view(text, frame):
 def main():
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--config", required=True, help="the rviz configuration")
-    ap.add_argument("--frame", default="", help="the frame to follow (default: the odometry's child frame)")
+    ap.add_argument("--frame", default="(odometry)",
+                    help="the frame to follow (default, (odometry): the odometry's child frame)")
     ap.add_argument("--odom-topic", default="/vi_ekf_slam/odom")
     a = ap.parse_args(rospy.myargv()[1:])
-    frame = a.frame
+    frame = "" if a.frame == "(odometry)" else a.frame
     if not frame:
         rospy.init_node("rviz_follow", anonymous=True, disable_signals=True)
         rospy.loginfo("rviz_follow: waiting for the first odometry on %s to follow its frame", a.odom_topic)

@@ -134,13 +134,13 @@ std::string kalibrRigFile(const KalibrImport& k, const std::string& camchain_pat
   if (!camchain_path.empty()) f << "#   camchain: " << camchain_path << "\n";
   if (!imu_path.empty()) f << "#   imu:      " << imu_path << "\n";
   f << "# Loaded on top of config/vi_ekf_slam.yaml (rig:=FILE, run_bag --rig FILE).\n";
-  if (!k.image_topic.empty() || !k.imu_topic.empty()) {
-    f << "# Kalibr's topics (launch arguments image_topic:=" << k.image_topic << " imu_topic:=" << k.imu_topic << ")\n";
-  }
   if (k.imu_rate_hz > 0.0) f << "# IMU rate in imu.yaml: " << k.imu_rate_hz << " Hz\n";
   for (const std::string& n : k.notes) f << "# " << n << "\n";
   f << "# Uncomment to use these intrinsics even when the driver publishes a different camera_info:\n"
     << "# calibration_source: file\n";
+  // The topics Kalibr's calibration recording had: the rig's drivers publish there.
+  if (!k.imu_topic.empty()) f << "imu_topic: " << k.imu_topic << "\n";
+  if (!k.image_topic.empty()) f << "image_topic: " << k.image_topic << "\n";
   for (const auto& [name, value] : k.params) f << name << ": " << value << "\n";
   return f.str();
 }

@@ -20,8 +20,8 @@ import yaml
 PKG = "vi_ekf_slam"
 FILTER = "/vi_ekf_slam/filter/"
 # Each launch file with the arguments it needs to load at all.
-LAUNCH_FILES = {"vi_ekf_slam.launch": [], "pedestrian_rig.launch": [], "realsense.launch": [],
-                "replay.launch": ["bag:=/tmp/none.bag"]}
+LAUNCH_FILES = {"vi_ekf_slam.launch": [], "pedestrian_rig.launch": [], "realsense.launch": ["rviz:=true"],
+                "replay.launch": ["bag:=/tmp/none.bag", "rviz:=true", "record:=/tmp/none_out.bag"]}
 REQUIRED = {"replay.launch": {"bag"}}
 
 

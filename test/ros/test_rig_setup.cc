@@ -35,10 +35,6 @@ std::string writeFile(const std::string& name, const std::string& text) {
   return path;
 }
 
-std::map<std::string, std::string> asMap(const KalibrImport& k) {
-  return std::map<std::string, std::string>(k.params.begin(), k.params.end());
-}
-
 NodeParams load(const ParamSource& src) {
   NodeParams p;
   EXPECT_EQ(loadParams(src, &p), "");
@@ -80,6 +76,9 @@ TEST(KalibrImport, TheRecordingsKalibrFilesGiveItsRigFile) {
   const std::string rig =
       writeFile("converted.yaml", kalibrRigFile(imp, dir + "kalibr/camchain-imucam.yaml", dir + "kalibr/imu.yaml"));
   EXPECT_EQ(load(YamlParams(rig)).node.T_b_c, from_rig.node.T_b_c);
+  // ... and to the topics of Kalibr's recording, which are the preset's.
+  EXPECT_EQ(load(YamlParams(rig)).node.imu_topic, from_rig.node.imu_topic);
+  EXPECT_EQ(load(YamlParams(rig)).node.image_topic, from_rig.node.image_topic);
 }
 
 const char* kEquidistantCamchain = R"(cam0:

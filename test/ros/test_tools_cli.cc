@@ -102,7 +102,7 @@ TEST(ToolsCli, RunBagPicksTopicsAndReadsCompressedImages) {
       } else if (auto imu = m.instantiate<sensor_msgs::Imu>()) {
         out.write("/imu/data", m.getTime(), *imu);
         out.write("/imu/data_raw", m.getTime(), *imu);
-      } else {
+      } else if (m.getTopic() != "/ground_truth/pose") {  // a user's recording has none
         out.write(m.getTopic(), m.getTime(), m);
       }
     }
@@ -118,6 +118,24 @@ TEST(ToolsCli, RunBagPicksTopicsAndReadsCompressedImages) {
   EXPECT_NE(ambiguous.output.find("--imu-topic"), std::string::npos) << ambiguous.output;
   const Outcome ok = run(base + " --imu-topic /imu/data");
   EXPECT_EQ(ok.code, 0) << ok.output;
+  // It says which topics it read and why.
+  EXPECT_NE(ok.output.find("reading imu /imu/data (given with --imu-topic), image /cam/image/compressed (the bag's "
+                           "only sensor_msgs/Image topic)"),
+            std::string::npos)
+      << ok.output;
+  EXPECT_NE(ok.output.find("the bag has no ground truth"), std::string::npos) << ok.output;
+  // In a pipe, the log lines come in the order they were written, before the run's summary.
+  EXPECT_LT(ok.output.find("initialized: static"), ok.output.find("sensor_centric_composition: ")) << ok.output;
+  EXPECT_LT(ok.output.find("initialized: static"), ok.output.find("# Run health")) << ok.output;
+  // The start's time is in the events file (on the bag's IMU clock).
+  {
+    std::ifstream events(dir + "/out/sensor_centric_composition_events.csv");
+    std::string header, first;
+    std::getline(events, header);
+    std::getline(events, first);
+    EXPECT_NE(first.find("\"initialized"), std::string::npos) << first;
+    EXPECT_GT(std::stod(first.substr(0, first.find(','))), 1.0) << first;
+  }
   // The compressed images reached the filter: it initialized and tracked (no "0 images").
   EXPECT_NE(ok.output.find("sensor_centric_composition: "), std::string::npos) << ok.output;
   EXPECT_EQ(ok.output.find(": 0 images"), std::string::npos) << ok.output;
@@ -150,6 +168,26 @@ TEST(ToolsCli, RunBagPicksTopicsAndReadsCompressedImages) {
   EXPECT_LT(refs_json[1]["position_rmse_m"].get<double>(), 1e-6) << refs_json.dump();
   EXPECT_NE(refs.output.find("imu clock, from 4 s): " + std::to_string(from_4) + " matched"), std::string::npos)
       << refs.output;
+  // The comparisons it made end the output; no remark about a missing ground truth then.
+  EXPECT_NE(refs.output.find("Against the references"), std::string::npos) << refs.output;
+  EXPECT_NE(refs.output.find("world_centric vs " + own + ": sim3, " + std::to_string(from_4) + " poses, from 4 s"),
+            std::string::npos)
+      << refs.output;
+  EXPECT_EQ(refs.output.find("the bag has no ground truth"), std::string::npos) << refs.output;
+  // A preset's topic the bag lacks is said, not passed over in silence.
+  const Outcome other_rig = run(std::string(VI_TOOL_RUN_BAG) + " --bag " + dir + "/user.bag --out " + dir +
+                                "/d435i --no-plots --imu-topic /imu/data --rig d435i --mechanization world_centric");
+  EXPECT_NE(other_rig.output.find("the bag's only sensor_msgs/Image topic; image_topic /camera/infra1/image_rect_raw "
+                                  "is not in the bag"),
+            std::string::npos)
+      << other_rig.output;
+  // A camera that does not fit the images (tum_vi's 512x512 on these): an error, not "ATE 0".
+  const Outcome unfit = run(std::string(VI_TOOL_RUN_BAG) + " --bag " + dir + "/user.bag --out " + dir +
+                            "/unfit --no-plots --imu-topic /imu/data --rig tum_vi --mechanization world_centric");
+  EXPECT_EQ(unfit.code, 1) << unfit.output;
+  EXPECT_NE(unfit.output.find("error: none of the"), std::string::npos) << unfit.output;
+  EXPECT_NE(unfit.output.find("differs from the calibration 512x512"), std::string::npos) << unfit.output;
+  EXPECT_FALSE(std::ifstream(dir + "/unfit/world_centric.tum").good()) << "an empty trajectory written";
   // The trajectory is a TUM file evo reads, its covariances beside it, one per pose.
   EXPECT_EQ(vi_ekf_slam::test::evoStrictTumProblem(dir + "/out/world_centric.tum"), "");
   std::vector<vi_ekf_slam::eval::StampedPose> written = vi_ekf_slam::eval::readTum(dir + "/out/world_centric.tum");
