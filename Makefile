@@ -93,7 +93,7 @@ lint: build
 	@clang-format --dry-run --Werror $(CXX_SOURCES) && echo "clang-format: clean"
 	@pyflakes3 $$(git ls-files '*.py' 2>/dev/null || find tools bench test -name '*.py') && echo "pyflakes: clean"
 	@# One clang-tidy per file, as many at once as there are cores (serially it took 2.5 min).
-	printf '%s\n' $(wildcard src/core/*.cc src/core/alignment/*.cc) | xargs -P $$(nproc) -n 1 clang-tidy -p $(WS)/build --quiet 2>&1 | \
+	printf '%s\n' $(wildcard src/core/*.cc src/core/*/*.cc) | xargs -P $$(nproc) -n 1 clang-tidy -p $(WS)/build --quiet 2>&1 | \
 	  { grep -v "warnings generated" || true; }
 	@echo "lint: clean"
 

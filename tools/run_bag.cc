@@ -325,7 +325,7 @@ void runOne(const Options& o, const std::string& mechanization, const glue::Inpu
   h["output_s"] = sink.poses.size() > 1 ? sink.poses.back().t - sink.poses.front().t : 0.0;
   h["input_s"] = bag_s;
   h["inputs"] = inputCounters(processor.counters());
-  if (params.filter.map.enabled && params.filter.map.relocalize) {
+  if (params.filter.map.within_run && params.filter.map.across_runs) {
     h["relocalizations"] = processor.pipeline().relocalizations();
     h["map_points"] = processor.pipeline().map().size();
     std::printf("  kept map: %d points across resets, %d relocalizations\n", processor.pipeline().map().size(),

@@ -7,6 +7,9 @@ usage: rviz_follow.py --config FILE.rviz [--frame NAME|(odometry)] [--odom-topic
 """
 import argparse
 import os
+import signal
+import subprocess
+import sys
 import tempfile
 
 import rospy
@@ -32,11 +35,16 @@ def main():
         rospy.loginfo("rviz_follow: waiting for the first odometry on %s to follow its frame", a.odom_topic)
         frame = rospy.wait_for_message(a.odom_topic, Odometry).child_frame_id
         rospy.signal_shutdown("the frame to follow is known")
-    fd, path = tempfile.mkstemp(prefix="vi_ekf_slam_follow_", suffix=".rviz")
-    with os.fdopen(fd, "w") as f:
-        f.write(followed_view(open(a.config).read(), frame))
-    os.execvp("rviz", ["rviz", "-d", path])
+    # The view lives as long as rviz, then goes (rviz reads it at its start and on "Save").
+    with tempfile.TemporaryDirectory(prefix="vi_ekf_slam_follow_") as tmp:
+        path = os.path.join(tmp, "view.rviz")
+        with open(path, "w") as f:
+            f.write(followed_view(open(a.config).read(), frame))
+        rviz = subprocess.Popen(["rviz", "-d", path])
+        signal.signal(signal.SIGINT, lambda *_: rviz.send_signal(signal.SIGINT))
+        signal.signal(signal.SIGTERM, lambda *_: rviz.send_signal(signal.SIGTERM))
+        return rviz.wait()
 
 
 if __name__ == "__main__":
-    main()
+    sys.exit(main())

@@ -20,6 +20,7 @@ fi
 mkdir -p "$(dirname "$OUT")"
 scratch=$(mktemp -d)
 export HOME=$scratch              # rviz aborts without a HOME
+export XDG_RUNTIME_DIR=$scratch   # (Qt makes /tmp/runtime-USER otherwise)
 disp=":$((90 + RANDOM % 9))"
 Xvfb "$disp" -screen 0 1280x800x24 -nolisten tcp > "$scratch/xvfb.log" 2>&1 &
 xvfb=$!

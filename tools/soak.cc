@@ -113,7 +113,7 @@ int main(int argc, char** argv) {
   for (Mechanization m : mechs) {
     EkfSlamConfig c;  // the node's defaults: composition every update, inverse depth, 100 landmarks
     c.mechanization = m;
-    c.map.enabled = map_arg == "keep";
+    c.map.within_run = map_arg == "keep";
     c.imu_noise = sc.imu.noise;
     c.update.pixel_noise_px = sc.cam.pixel_noise_px;
     std::vector<Row> rows;

@@ -239,7 +239,7 @@ EkfSlamConfig withStudyOptions(EkfSlamConfig c, const Options& o, const sim::Sce
   if (!o.imu.empty()) c.zero_velocity.velocity_sigma_mps = eval::kEurocMavStandingVelocitySigma;
   if (o.gate > 0.0) c.update.gate_probability = o.gate;
   if (o.estimate_extrinsic) c.estimate_extrinsic = true;
-  if (!o.map.empty()) c.map.enabled = o.map == "keep";
+  if (!o.map.empty()) c.map.within_run = o.map == "keep";
   return c;
 }
 

@@ -71,7 +71,7 @@ std::string EkfSlamConfig::validate() const {
   checkRange(err, "map_descriptor_ratio", map.descriptor_ratio);
   checkRange(err, "map_search_gate_probability", map.search_gate_probability);
   checkRange(err, "map_max_search_sigma_px", map.max_search_sigma_px);
-  checkRange(err, "map_max_archived_points", map.max_archived_points);
+  checkRange(err, "map_max_kept_points", map.max_kept_points);
   checkRange(err, "map_relocalize_min_inliers", map.relocalize_min_inliers);
   checkRange(err, "map_relocalize_reprojection_px", map.relocalize_reprojection_px);
   checkRange(err, "map_relocalize_max_tilt_deg", map.relocalize_max_tilt_deg);

@@ -41,7 +41,7 @@ const std::map<std::string, ParamRange>& table() {
       {"map_descriptor_ratio", {0.1, 1.0}},
       {"map_search_gate_probability", {0.5, 0.999999}},
       {"map_max_search_sigma_px", {1.0, 1000.0}},
-      {"map_max_archived_points", {0, 100000}},
+      {"map_max_kept_points", {0, 100000}},
       {"map_relocalize_min_inliers", {4, 1000}},
       {"map_relocalize_reprojection_px", {0.1, 50.0}},
       {"map_relocalize_max_tilt_deg", {0.1, 90.0}},

@@ -24,7 +24,7 @@ VioPipeline::VioPipeline(const EkfSlamConfig& config, const PipelineParams& para
       params_(params),
       listener_(listener),
       static_init_(params.static_init),
-      map_(config.map.max_archived_points) {}
+      map_(config.map.max_kept_points) {}
 
 VioPipeline::VioPipeline(const EkfSlamConfig& config, const PipelineParams& params, const CameraModel& camera,
                          const CameraExtrinsics& T_b_c, PipelineListener& listener)
@@ -52,7 +52,7 @@ void VioPipeline::clearCamera() {
 bool VioPipeline::setConfig(const EkfSlamConfig& config, std::string* error) {
   if (filter_ && !filter_->setConfig(config, error)) return false;
   config_ = config;
-  map_.setMaxPoints(config.map.max_archived_points);
+  map_.setMaxPoints(config.map.max_kept_points);
   return true;
 }
 
@@ -70,7 +70,7 @@ bool VioPipeline::loadMap(const std::string& path, std::string* error) {
 }
 
 bool VioPipeline::saveMap(const std::string& path, std::string* error, int* points) const {
-  MapArchive all = map_;
+  KeptMap all = map_;
   all.setMaxPoints(std::numeric_limits<int>::max());
   if (filter_ && filter_->initialized() && in_map_) all.merge(filter_->mapPoints());
   if (points) *points = all.size();

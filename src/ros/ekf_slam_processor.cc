@@ -40,7 +40,7 @@ bool EkfSlamProcessor::saveMap(std::string* message) const {
     *message = "no map_file parameter: nowhere to save the map";
     return false;
   }
-  if (!params_.filter.map.enabled) {
+  if (!params_.filter.map.within_run) {
     *message = "keep_map is off: no landmark has an appearance to be found again by";
     return false;
   }
@@ -100,7 +100,7 @@ namespace {
 /// The tracker describes its corners and searches again only for a filter that keeps its map.
 TrackerParams trackerParams(const NodeParams& p) {
   TrackerParams t = p.tracker;
-  t.descriptors = p.filter.map.enabled;
+  t.descriptors = p.filter.map.within_run;
   return t;
 }
 }  // namespace

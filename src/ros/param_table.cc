@@ -218,7 +218,7 @@ std::vector<ParamSpec> makeTable() {
             "landmarks not observed for this long leave the tracked map: dormant with keep_map, else marginalized "
             "(-1: never)",
             dyn),
-      field("keep_map", "map", VI_FIELD(p.filter.map.enabled), "",
+      field("keep_map", "map", VI_FIELD(p.filter.map.within_run), "",
             "keep landmarks whose tracks ended as dormant and find them again by appearance in their predicted region",
             dyn),
       field("map_max_dormant_landmarks", "map", VI_FIELD(p.filter.map.max_dormant), "count",
@@ -254,11 +254,11 @@ std::vector<ParamSpec> makeTable() {
             "chi^2 gate (2 dof) of the region a dormant landmark is searched in", dyn),
       field("map_max_search_sigma_px", "map", VI_FIELD(p.filter.map.max_search_sigma_px), "px",
             "a dormant landmark is searched for only while its predicted pixel's std-dev is below this", dyn),
-      field("map_relocalize", "map", VI_FIELD(p.filter.map.relocalize), "",
+      field("map_relocalize", "map", VI_FIELD(p.filter.map.across_runs), "",
             "keep_map: the map outlives resets (and map_file loads one); a new run is placed back in it when the "
             "camera sees mapped points again (appearance matches + PnP RANSAC)",
             dyn),
-      field("map_max_archived_points", "map", VI_FIELD(p.filter.map.max_archived_points), "count",
+      field("map_max_kept_points", "map", VI_FIELD(p.filter.map.max_kept_points), "count",
             "points kept across resets and saved; beyond it the first archived leave first", dyn),
       field("map_relocalize_min_inliers", "map", VI_FIELD(p.filter.map.relocalize_min_inliers), "count",
             "matches to the kept map that must agree on the camera's pose for a relocalization", dyn),

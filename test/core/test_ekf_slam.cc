@@ -153,6 +153,26 @@ TEST(EkfSlam, SwitchingMechanizationWhileRunningKeepsPoseAndMap) {
   EXPECT_EQ(switches, 3);
 }
 
+// Switched before the start, the filter keeps the calibrated extrinsic and whether it estimates it:
+// extrinsics() and the state say the calibration, not an identity, until and after the start.
+TEST(EkfSlam, AMechanizationSwitchedBeforeTheStartKeepsTheCalibration) {
+  EkfSlamConfig cfg;
+  cfg.estimate_extrinsic = true;
+  const CameraExtrinsics T = sim::torsoCameraExtrinsics();
+  EkfSlam f(cfg, sim::paperCamera(), T);
+  f.setMechanization(Mechanization::kSensorCentric);
+  EXPECT_FALSE(f.initialized());
+  EXPECT_EQ(f.extrinsics().p_b_c, T.p_b_c);
+  EXPECT_EQ(f.extrinsics().R_b_c, T.R_b_c);
+  EXPECT_TRUE(f.state().estimatesExtrinsic());
+  NavState init;
+  init.q_n_b = Quat::Identity();
+  f.initialize(init);
+  EXPECT_EQ(f.mechanization(), Mechanization::kSensorCentric);
+  EXPECT_EQ(f.extrinsics().p_b_c, T.p_b_c);
+  EXPECT_TRUE(f.state().estimatesExtrinsic());
+}
+
 TEST(EkfSlam, AnImuGapAddsTheMotionItMissedAsUncertainty) {
   EkfSlamConfig cfg;
   cfg.mechanization = Mechanization::kWorldCentric;

@@ -1,5 +1,7 @@
 #include <gtest/gtest.h>
 
+#include "scratch_dir.h"
+
 #include <cstdlib>
 #include <fstream>
 
@@ -37,7 +39,7 @@ TEST(RealFeatures, BestConfigurationFollowsTheEurocGroundTruth) {
 }
 
 TEST(Datasets, ReadersRejectMalformedFiles) {
-  const std::string path = ::testing::TempDir() + "bad_imu.csv";
+  const std::string path = vi_ekf_slam::test::programScratch() / "bad_imu.csv";
   std::ofstream(path) << "#timestamp,wx,wy,wz,ax,ay,az\n1,0,0,0,0,0\n";
   EXPECT_THROW(eval::readAslImu(path), std::runtime_error);
   std::ofstream(path) << "1,0,0,x,0,0,9.8\n";

@@ -3,6 +3,8 @@
 // the estimate's metres.
 #include <gtest/gtest.h>
 
+#include "scratch_dir.h"
+
 #include <Eigen/Geometry>
 #include <fstream>
 #include <random>
@@ -75,7 +77,7 @@ TEST(ReferenceComparison, ErrorsAreInTheReferencesUnitsAsEvoMeasuresThem) {
 
 // EuRoC's ground truth CSV (nanoseconds, position then qw qx qy qz) is a reference as it is.
 TEST(ReferenceComparison, EurocGroundTruthCsvIsReadAsAReference) {
-  const std::string path = "/tmp/vi_ekf_slam_euroc_gt.csv";
+  const std::string path = vi_ekf_slam::test::programScratch() / "euroc_gt.csv";
   {
     std::ofstream f(path);
     f << "#timestamp,p_RS_R_x [m],p_RS_R_y [m],p_RS_R_z [m],q_RS_w [],q_RS_x [],q_RS_y [],q_RS_z [],v_RS_R_x [m s^-1],"

@@ -2,6 +2,8 @@
 // DATA_DIR/trajectories, so the reader takes the common variants and names what it refuses.
 #include <gtest/gtest.h>
 
+#include "scratch_dir.h"
+
 #include <cmath>
 #include <cstdio>
 #include <limits>
@@ -18,7 +20,7 @@ using namespace vi_ekf_slam;
 namespace {
 
 std::string writeFile(const std::string& name, const std::string& text) {
-  const std::string path = "/tmp/vi_ekf_slam_tum_io_" + name + ".txt";
+  const std::string path = vi_ekf_slam::test::programScratch() / ("tum_io_" + name + ".txt");
   std::ofstream(path) << text;
   return path;
 }
@@ -95,8 +97,8 @@ std::vector<eval::StampedPose> someTrajectoryWithCovariances() {
 // the covariances travel in their own file and come back as written.
 TEST(TumIo, WrittenTrajectoriesPassEvosRulesAndTheCovariancesComeBack) {
   const std::vector<eval::StampedPose> poses = someTrajectoryWithCovariances();
-  const std::string tum = "/tmp/vi_ekf_slam_tum_io_written.tum";
-  const std::string cov = "/tmp/vi_ekf_slam_tum_io_written_covariance.txt";
+  const std::string tum = vi_ekf_slam::test::programScratch() / "tum_io_written.tum";
+  const std::string cov = vi_ekf_slam::test::programScratch() / "tum_io_written_covariance.txt";
   eval::writeTum(tum, poses, "t x y z qx qy qz qw (a header)");
   eval::writePoseCovariances(cov, poses);
   EXPECT_EQ(test::evoStrictTumProblem(tum), "");

@@ -8,6 +8,7 @@
 #include <cstdio>
 #include <string>
 
+#include "../scratch_dir.h"
 #include "vi_ekf_slam/ros/bag_io.h"
 #include "vi_ekf_slam/sim/scenarios.h"
 
@@ -22,9 +23,8 @@ CameraIntrinsics testIntrinsics() {
 }
 
 TEST(RigBagWriter, StaticTransformIsLatchedAndReadsBack) {
-  char dir[] = "/tmp/vi_ekf_slam_bag_io_XXXXXX";
-  ASSERT_NE(mkdtemp(dir), nullptr);
-  const std::string path = std::string(dir) + "/rig.bag";
+  const vi_ekf_slam::test::ScratchDir dir("vi_ekf_slam_bag_io");
+  const std::string path = dir / "rig.bag";
   const CameraIntrinsics in = testIntrinsics();
   CameraExtrinsics T_b_c;
   T_b_c.R_b_c = Eigen::AngleAxisd(0.3, Vec3(0.2, -1.0, 0.5).normalized()).toRotationMatrix();
@@ -72,8 +72,6 @@ TEST(RigBagWriter, StaticTransformIsLatchedAndReadsBack) {
   EXPECT_DOUBLE_EQ(info.camera->cy, in.cy);
   EXPECT_EQ(info.camera->distortion, in.distortion);
   EXPECT_DOUBLE_EQ(info.start, 100.0);
-  std::remove(path.c_str());
-  rmdir(dir);
 }
 
 }  // namespace

@@ -3,6 +3,8 @@
 // them starts, queues or maps clocks in a way of its own.
 #include <gtest/gtest.h>
 
+#include "../scratch_dir.h"
+
 #include <algorithm>
 #include <cstdio>
 #include <filesystem>
@@ -10,7 +12,7 @@
 #include <random>
 
 #include "vi_ekf_slam/core/frames.h"
-#include "vi_ekf_slam/core/map_archive.h"
+#include "vi_ekf_slam/core/map_reuse/kept_map.h"
 #include "vi_ekf_slam/ros/conversions.h"
 #include "vi_ekf_slam/ros/ekf_slam_processor.h"
 #include "vi_ekf_slam/sim/scenarios.h"
@@ -144,8 +146,9 @@ TEST(OnePipeline, AMapSavedByOneNodeStartsTheNextInIt) {
   ros::Time::init();
   const sim::Scenario sc = scenario(2.0);
   NodeParams params = nodeParams(sc);
-  params.filter.map.enabled = true;
-  params.node.map_file = (std::filesystem::temp_directory_path() / "vi_ekf_slam_node_map.yaml").string();
+  params.filter.map.within_run = true;
+  const test::ScratchDir scratch;
+  params.node.map_file = scratch / "map.yaml";
   std::remove(params.node.map_file.c_str());
   const double t0 = std::max(0.0, sc.trajectory->startTime());
   OdomRecorder first;
@@ -154,7 +157,7 @@ TEST(OnePipeline, AMapSavedByOneNodeStartsTheNextInIt) {
   std::string message;
   ASSERT_TRUE(mapping.saveMap(&message)) << message;
   std::printf("%s\n", message.c_str());
-  MapArchive saved;
+  KeptMap saved;
   ASSERT_TRUE(saved.load(params.node.map_file, &message)) << message;
   EXPECT_GT(saved.size(), 50);
   OdomRecorder second;
@@ -168,7 +171,7 @@ TEST(OnePipeline, AMapSavedByOneNodeStartsTheNextInIt) {
   EXPECT_TRUE(relocalized);
   EXPECT_TRUE(localized.pipeline().inMap());
   // Without keep_map there is nothing to save, and the node says why.
-  params.filter.map.enabled = false;
+  params.filter.map.within_run = false;
   OdomRecorder third;
   EkfSlamProcessor plain(params, third, nullptr);
   EXPECT_FALSE(plain.saveMap(&message));

@@ -2,6 +2,8 @@
 // the rig presets of config/rigs (each loads, validates, and runs on a synthetic bag written with
 // its topic names and frames).
 #include <gtest/gtest.h>
+
+#include "../scratch_dir.h"
 #include <rosbag/bag.h>
 #include <tf2_msgs/TFMessage.h>
 
@@ -30,7 +32,7 @@ std::string dataDir() {
 }
 
 std::string writeFile(const std::string& name, const std::string& text) {
-  const std::string path = (fs::temp_directory_path() / ("vi_ekf_slam_rig_" + name)).string();
+  const std::string path = test::programScratch() / ("rig_" + name);
   std::ofstream(path) << text;
   return path;
 }
@@ -264,7 +266,7 @@ std::string presetBag(const std::string& name, const NodeParams& p) {
   o.imu_frame = p.node.body_frame.empty() ? name + "_imu_frame" : p.node.body_frame;
   o.camera_frame = name + "_camera_frame";
   const test::RigStream s = test::makeRigStream(o, 100.0);
-  const std::string path = (fs::temp_directory_path() / ("vi_ekf_slam_preset_" + name + ".bag")).string();
+  const std::string path = test::programScratch() / ("preset_" + name + ".bag");
   rosbag::Bag bag(path, rosbag::bagmode::Write);
   tf2_msgs::TFMessage tf;
   tf.transforms.push_back(s.imu_camera);

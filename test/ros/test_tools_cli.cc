@@ -4,6 +4,7 @@
 #include <gtest/gtest.h>
 
 #include "../evo_tum_rules.h"
+#include "../scratch_dir.h"
 #include "vi_ekf_slam/eval/tum_io.h"
 #include <rosbag/bag.h>
 #include <rosbag/view.h>
@@ -84,7 +85,8 @@ TEST(ToolsCli, HelpPrintsUsageAndBadNumbersAreRefused) {
 // run_bag on a user's bag: two IMU topics and JPEG images (sensor_msgs/CompressedImage). Without
 // imu_topic:= it refuses and lists both; with it, it runs on the compressed images as on raw ones.
 TEST(ToolsCli, RunBagPicksTopicsAndReadsCompressedImages) {
-  const std::string dir = "/tmp/vi_ekf_slam_run_bag_topics";
+  const vi_ekf_slam::test::ScratchDir scratch("vi_ekf_slam_run_bag_topics");
+  const std::string dir = scratch.path();
   ASSERT_EQ(run("rm -rf " + dir + " && mkdir -p " + dir).code, 0);
   const Outcome made = run(std::string(VI_TOOL_MAKE_BAG) + " --out " + dir + "/raw.bag --duration 6 --standing 2");
   ASSERT_EQ(made.code, 0) << made.output;
@@ -219,7 +221,8 @@ TEST(ToolsCli, RunBagPicksTopicsAndReadsCompressedImages) {
 // study refuses is a row of the table that says why, the other cases still run, and the suite
 // ends non-zero. (A stand-in study answers at once; the real one would take minutes per case.)
 TEST(ToolsCli, SuiteReportsACaseTheStudyCannotRunAndGoesOn) {
-  const std::string dir = "/tmp/vi_ekf_slam_suite_failure";
+  const vi_ekf_slam::test::ScratchDir scratch("vi_ekf_slam_suite_failure");
+  const std::string dir = scratch.path();
   ASSERT_EQ(run("rm -rf " + dir + " && mkdir -p " + dir + "/data/trajectories").code, 0);
   std::ofstream(dir + "/data/trajectories/broken.txt") << "10.0 1 2 3 0 0 0 1\n9.0 1 2 3 0 0 0 1\n";
   std::ofstream(dir + "/data/trajectories/walk.txt") << "10.0 1 2 3 0 0 0 1\n";
@@ -276,7 +279,8 @@ echo '{"schema": "vi_ekf_slam.report/1", "tool": "study", "title": "stand-in", "
 // that shows which runs carry a run-averaged NEES. Each row ends with the time offset's error and
 // sigma, which start at the prior's (the simulator's offset is 0, the filter starts at 0).
 TEST(ToolsCli, StudyWritesEveryRunsErrorsWithAllRuns) {
-  const std::string dir = "/tmp/vi_ekf_slam_study_all_runs";
+  const vi_ekf_slam::test::ScratchDir scratch("vi_ekf_slam_study_all_runs");
+  const std::string dir = scratch.path();
   ASSERT_EQ(run("rm -rf " + dir).code, 0);
   const std::string study =
       std::string(VI_TOOL_STUDY) + " --trajectory builtin --runs 2 --max-duration 2 --configs default";
@@ -305,7 +309,8 @@ TEST(ToolsCli, StudyWritesEveryRunsErrorsWithAllRuns) {
 // one image's update moved the estimate by (< 1 mm/s^2 measured), against the drawn 0.05 m/s^2
 // sigma otherwise; the summary says which it was; another word is refused.
 TEST(ToolsCli, StudyRunsAnImuWithoutBiasesWhenAsked) {
-  const std::string dir = "/tmp/vi_ekf_slam_study_imu_biases";
+  const vi_ekf_slam::test::ScratchDir scratch("vi_ekf_slam_study_imu_biases");
+  const std::string dir = scratch.path();
   ASSERT_EQ(run("rm -rf " + dir).code, 0);
   const std::string study = std::string(VI_TOOL_STUDY) +
                             " --trajectory builtin --runs 2 --max-duration 2 --configs default --all-runs --out " + dir;
@@ -358,7 +363,8 @@ TEST(ToolsCli, TheReadmeQuotesTheResultsPage) {
   const size_t digit = changed.find_first_of("0123456789", changed.find("|", quote));
   ASSERT_NE(digit, std::string::npos);
   changed[digit] = changed[digit] == '9' ? '8' : static_cast<char>(changed[digit] + 1);
-  const std::string tmp = ::testing::TempDir() + "README_changed.md";
+  const vi_ekf_slam::test::ScratchDir scratch("vi_ekf_slam_readme");
+  const std::string tmp = scratch / "README_changed.md";
   std::ofstream(tmp) << changed;
   const Outcome bad = run("/usr/bin/python3 " + dir + "/tools/results_page.py --check --out " + dir +
                           "/docs/results.md --readme " + tmp);
@@ -369,9 +375,8 @@ TEST(ToolsCli, TheReadmeQuotesTheResultsPage) {
 // never in the source tree it was built from: without the package on ROS_PACKAGE_PATH and without
 // --config it says so and stops.
 TEST(ToolsCli, RunBagFindsItsDefaultsThroughThePackageNotTheSourceTree) {
-  const std::string empty = ::testing::TempDir() + "no_packages";
-  const Outcome o = run("mkdir -p " + empty + " && env ROS_PACKAGE_PATH=" + empty + " " + VI_TOOL_RUN_BAG +
-                        " --bag /nonexistent.bag");
+  const vi_ekf_slam::test::ScratchDir empty("vi_ekf_slam_no_packages");
+  const Outcome o = run("env ROS_PACKAGE_PATH=" + empty.path() + " " + VI_TOOL_RUN_BAG + " --bag /nonexistent.bag");
   EXPECT_EQ(o.code, 2) << o.output;
   EXPECT_NE(o.output.find("ROS_PACKAGE_PATH"), std::string::npos) << o.output;
 }
@@ -408,7 +413,8 @@ BagCounts countBag(const std::string& path) {
 // vi_ekf_slam_perturb_bag: each fault class as its size says, on a short rendered bag; the rest
 // of the bag as it was.
 TEST(ToolsCli, PerturbBagWritesEachFaultClassAsItsSizeSays) {
-  const std::string dir = "/tmp/vi_ekf_slam_perturb";
+  const vi_ekf_slam::test::ScratchDir scratch("vi_ekf_slam_perturb");
+  const std::string dir = scratch.path();
   ASSERT_EQ(run("rm -rf " + dir + " && mkdir -p " + dir).code, 0);
   ASSERT_EQ(run(std::string(VI_TOOL_MAKE_BAG) + " --out " + dir + "/in.bag --duration 9 --standing 1").code, 0);
   const BagCounts clean = countBag(dir + "/in.bag");
@@ -453,7 +459,8 @@ TEST(ToolsCli, PerturbBagWritesEachFaultClassAsItsSizeSays) {
 // the resets are in <run>_events.csv and counted in health.json, and --segments writes each
 // stretch in the filter's own world.
 TEST(ToolsCli, RunBagWritesTheWholeRunAcrossResets) {
-  const std::string dir = "/tmp/vi_ekf_slam_run_bag_resets";
+  const vi_ekf_slam::test::ScratchDir scratch("vi_ekf_slam_run_bag_resets");
+  const std::string dir = scratch.path();
   ASSERT_EQ(run("rm -rf " + dir + " && mkdir -p " + dir).code, 0);
   ASSERT_EQ(run(std::string(VI_TOOL_MAKE_BAG) + " --out " + dir + "/walk.bag --duration 10 --standing 1").code, 0);
   const Outcome o =

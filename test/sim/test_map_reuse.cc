@@ -1,4 +1,4 @@
-// Keeping the map (map_memory.h) on the simulator's corridor walked there and back: landmarks
+// Keeping the map (map_reuse/revisit_matching.h) on the simulator's corridor walked there and back: landmarks
 // whose tracks ended are found again on the way back, none of them is another point (the
 // simulator knows), also where the texture repeats, and the filter stays consistent. Weakening
 // the search (no ratio test, no joint compatibility, regions far wider than the filter's
@@ -53,8 +53,8 @@ Outcome run(const Scenario& sc, const std::function<void(EkfSlamConfig&)>& confi
 
 TEST(MapReuse, TheCorridorWalkedBackFindsItsLandmarksAgain) {
   const Scenario sc = corridorReturn(0);
-  const Outcome kept = run(sc, [](EkfSlamConfig& c) { c.map.enabled = true; });
-  const Outcome forgot = run(sc, [](EkfSlamConfig& c) { c.map.enabled = false; });
+  const Outcome kept = run(sc, [](EkfSlamConfig& c) { c.map.within_run = true; });
+  const Outcome forgot = run(sc, [](EkfSlamConfig& c) { c.map.within_run = false; });
   EXPECT_GE(kept.revisits, 4 * kRuns);
   EXPECT_EQ(kept.false_revisits, 0);
   EXPECT_EQ(forgot.revisits, 0);
@@ -63,7 +63,7 @@ TEST(MapReuse, TheCorridorWalkedBackFindsItsLandmarksAgain) {
   // Matches believed only after their tracks stayed on the prediction for 5 images: found again
   // too, later (the revisits are counted when believed), and still none false.
   const Outcome confirmed = run(sc, [](EkfSlamConfig& c) {
-    c.map.enabled = true;
+    c.map.within_run = true;
     c.map.revisit_confirm_frames = 5;
   });
   EXPECT_GE(confirmed.revisits, 2 * kRuns);
@@ -75,11 +75,11 @@ TEST(MapReuse, RepeatedTextureClosesNoFalseLoop) {
   // One pattern for the whole world (a tiled floor): every landmark looks like the others seen from
   // the same place; only the view and the geometry tell them apart.
   const Scenario sc = corridorReturn(1);
-  const Outcome kept = run(sc, [](EkfSlamConfig& c) { c.map.enabled = true; });
+  const Outcome kept = run(sc, [](EkfSlamConfig& c) { c.map.within_run = true; });
   EXPECT_EQ(kept.false_revisits, 0);
   EXPECT_LT(kept.sum.nees_pose, kept.sum.pose_band.hi);
   const Outcome weak = run(sc, [](EkfSlamConfig& c) {
-    c.map.enabled = true;
+    c.map.within_run = true;
     c.map.descriptor_ratio = 1.0;
     c.map.distinct_in_view = false;
     c.map.search_gate_probability = 0.999999;

@@ -1,9 +1,11 @@
-// Relocalization (map_archive.h) on the simulator's corridor walked there and back: the filter is
+// Relocalization (map_reuse/kept_map.h) on the simulator's corridor walked there and back: the filter is
 // reset on the way back, in a place it has mapped; the new run is placed back in the kept map
 // within a second of its start, with the error it had before the reset plus at most 0.1 m, and no
 // relocalization pairs a feature with another point (the simulator knows). Without the kept map
 // the new run only continues from its last estimate.
 #include <gtest/gtest.h>
+
+#include "scratch_dir.h"
 
 #include <cmath>
 #include <filesystem>
@@ -37,8 +39,8 @@ ResetOutcome resetRun(Scenario sc, bool relocalize, std::uint64_t seed) {
   EkfSlamConfig c;
   c.imu_noise = sc.imu.noise;
   c.update.pixel_noise_px = sc.cam.pixel_noise_px;
-  c.map.enabled = true;
-  c.map.relocalize = relocalize;
+  c.map.within_run = true;
+  c.map.across_runs = relocalize;
   std::mt19937_64 rng(seed);
   const NavState truth0 = trueNavState(*sc.trajectory, sc.trajectory->startTime());
   const NavState init = drawInitialEstimate(truth0, c.initial, rng);
@@ -93,19 +95,20 @@ TEST(Relocalization, ASecondWalkStartsInTheMapSavedByTheFirst) {
   // The first walk maps the corridor there and back and saves the map; the second starts later on
   // the same walk in a world of its own (2 m and 40 deg away: a new session knows nothing), and is
   // placed in the saved map as soon as it sees it.
-  const std::string file = (std::filesystem::temp_directory_path() / "vi_ekf_slam_relocalization_map.yaml").string();
+  const test::ScratchDir scratch;
+  const std::string file = scratch / "map.yaml";
   std::remove(file.c_str());
   Scenario first = corridorReturn(0);
   first.save_map_file = file;
   EkfSlamConfig c;
   c.imu_noise = first.imu.noise;
   c.update.pixel_noise_px = first.cam.pixel_noise_px;
-  c.map.enabled = true;
+  c.map.within_run = true;
   std::mt19937_64 rng(61);
   const NavState truth0 = trueNavState(*first.trajectory, first.trajectory->startTime());
   const SimRun one = runSimulation(first, c, drawInitialEstimate(truth0, c.initial, rng), rng);
   const double mapped_error = (one.frames.back().estimate.p_n_b - one.frames.back().truth.p_n_b).norm();
-  MapArchive saved;
+  KeptMap saved;
   std::string error;
   ASSERT_TRUE(saved.load(file, &error)) << error;
   EXPECT_GT(saved.size(), 300);  // what left the state while walking, not only the last view

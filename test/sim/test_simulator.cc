@@ -1,5 +1,7 @@
 #include <gtest/gtest.h>
 
+#include "scratch_dir.h"
+
 #include <algorithm>
 #include <fstream>
 #include <set>
@@ -43,7 +45,7 @@ std::pair<double, double> deadReckoningError(const sim::Trajectory& traj, double
 }
 
 std::string writeTemp(const std::string& name, const std::string& content) {
-  const std::string path = ::testing::TempDir() + name;
+  const std::string path = test::programScratch() / name;
   std::ofstream(path) << content;
   return path;
 }

@@ -4,7 +4,7 @@
 #include <optional>
 #include <string>
 
-#include "vi_ekf_slam/core/map_memory.h"
+#include "vi_ekf_slam/core/map_reuse/map_reuse_params.h"
 #include "vi_ekf_slam/core/imu_sample_check.h"
 #include "vi_ekf_slam/core/delayed_landmarks.h"
 #include "vi_ekf_slam/core/divergence_monitor.h"
@@ -94,9 +94,9 @@ struct EkfSlamConfig {
   TriangulationParams triangulation;
   int max_landmarks = 150;  ///< map size bound, dormant landmarks included (tracked ones take precedence) [count]
   /// Landmarks not observed for this long leave the tracked map [s] (<0: never): dormant while
-  /// map.enabled and they have a descriptor, otherwise dropped.
+  /// map.within_run and they have a descriptor, otherwise dropped.
   double landmark_timeout_s = 0.5;
-  MapMemoryParams map;         ///< dormant landmarks and finding them again (map_memory.h)
+  MapReuseParams map;          ///< map reuse within a run and across runs (map_reuse/)
   double max_imu_gap_s = 0.1;  ///< IMU intervals longer than this are gaps [s]
   /// Over a gap the IMU is interpolated, and the motion it missed enters as uncertainty: an
   /// unknown acceleration and angular rate with these std-devs (a walking torso: ~3 m/s^2, 0.3 rad/s).

@@ -49,7 +49,7 @@ UpdateResult ekfUpdate(FilterState& state, const std::vector<FeatureObservation>
 
 /// Where landmark `landmark_index` (map position) should appear in the image and how uncertain
 /// that is: the predicted pixel and the innovation covariance H P H^T + R [px^2] an observation of
-/// it would have (the search region for a landmark whose track ended, map_memory.h). Nothing if
+/// it would have (the search region for a landmark whose track ended, map_reuse/revisit_matching.h). Nothing if
 /// it cannot be predicted (behind the camera, outside the image).
 struct PredictedPixel {
   Eigen::Vector2d uv;

@@ -30,10 +30,10 @@ struct FeatureObservation {
   std::int64_t id = 0;
   Eigen::Vector2d uv = Eigen::Vector2d::Zero();  ///< [px]
   /// The track's appearance where it was detected (the same on every image of the track), if the
-  /// front end gives one: what finds the point again once the track has ended (map_memory.h).
+  /// front end gives one: what finds the point again once the track has ended (map_reuse/revisit_matching.h).
   std::optional<Descriptor> descriptor = std::nullopt;
   /// Its appearance described again every kDescribeEveryFrames images (the latest view's): what
-  /// the map kept across resets holds (map_archive.h), as a return to the same place sees that one.
+  /// the map kept across resets holds (map_reuse/kept_map.h), as a return to the same place sees that one.
   std::optional<Descriptor> latest_descriptor = std::nullopt;
 };
 
@@ -42,7 +42,7 @@ struct FeatureObservation {
 constexpr int kDescribeEveryFrames = 10;
 
 /// Where the filter expects a landmark whose track ended: its predicted pixel and the innovation
-/// covariance of that prediction [px^2] (map_memory.h).
+/// covariance of that prediction [px^2] (map_reuse/revisit_matching.h).
 struct SearchRegion {
   std::int64_t landmark_id = 0;
   Eigen::Vector2d uv = Eigen::Vector2d::Zero();     ///< [px]

@@ -15,7 +15,8 @@
 #include "vi_ekf_slam/core/dynamic_initializer.h"
 #include "vi_ekf_slam/core/ekf_slam.h"
 #include "vi_ekf_slam/core/imu_sample_check.h"
-#include "vi_ekf_slam/core/map_archive.h"
+#include "vi_ekf_slam/core/map_reuse/kept_map.h"
+#include "vi_ekf_slam/core/map_reuse/relocalization.h"
 #include "vi_ekf_slam/core/static_initializer.h"
 
 namespace vi_ekf_slam {
@@ -119,11 +120,11 @@ class VioPipeline {
   /// The map kept across resets (keep_map with map_relocalize): what earlier runs and a loaded
   /// file mapped, in the map's frame. A new filter is placed in it by relocalization; the first
   /// one of an empty map defines it.
-  const MapArchive& map() const { return map_; }
+  const KeptMap& map() const { return map_; }
   /// Whether the running filter's world is the map's frame (false: not relocalized yet).
   bool inMap() const { return in_map_; }
   int relocalizations() const { return relocalizations_; }
-  /// Replaces the kept map by a file's (MapArchive::load); the running filter is then placed in it
+  /// Replaces the kept map by a file's (KeptMap::load); the running filter is then placed in it
   /// by relocalization. False and *error if the file cannot be used.
   bool loadMap(const std::string& path, std::string* error);
   /// Writes the kept map with the running filter's points (when it is in the map) to a file, and
@@ -171,7 +172,7 @@ class VioPipeline {
     std::future<std::pair<std::optional<DynamicInitResult>, std::string>> outcome;
   };
   std::optional<StartAttempt> attempt_;  ///< background attempts: the one in flight
-  MapArchive map_;
+  KeptMap map_;
   bool in_map_ = false;
   int relocalizations_ = 0;
 };

@@ -1,11 +1,11 @@
 // Keeping the map: the search region of a landmark whose track ended, and the appearance match
-// that may re-identify it, only where nothing else in the image looks like it (map_memory.h).
+// that may re-identify it, only where nothing else in the image looks like it (map_reuse/revisit_matching.h).
 #include <gtest/gtest.h>
 
 #include "test_helpers.h"
 #include "vi_ekf_slam/core/chi_squared.h"
 #include "vi_ekf_slam/core/ekf_update.h"
-#include "vi_ekf_slam/core/map_memory.h"
+#include "vi_ekf_slam/core/map_reuse/revisit_matching.h"
 
 using namespace vi_ekf_slam;
 
@@ -26,7 +26,7 @@ RevisitCandidate candidate(std::int64_t id, const Eigen::Vector2d& uv, double si
 FeatureObservation corner(std::int64_t id, const Eigen::Vector2d& uv, const Descriptor& d) { return {id, uv, d}; }
 }  // namespace
 
-TEST(MapMemory, HammingDistanceCountsTheDifferingBits) {
+TEST(RevisitMatching, HammingDistanceCountsTheDifferingBits) {
   const Descriptor a = pattern(1);
   EXPECT_EQ(hammingDistance(a, a), 0);
   EXPECT_EQ(hammingDistance(a, flipped(a, 13)), 13);
@@ -35,8 +35,8 @@ TEST(MapMemory, HammingDistanceCountsTheDifferingBits) {
   EXPECT_EQ(hammingDistance(a, inverse), 256);
 }
 
-TEST(MapMemory, AMatchIsTheLookAlikeInsideTheRegion) {
-  const MapMemoryParams p;
+TEST(RevisitMatching, AMatchIsTheLookAlikeInsideTheRegion) {
+  const MapReuseParams p;
   const Descriptor a = pattern(1), b = pattern(2);
   ASSERT_GT(hammingDistance(a, b), 80);
   const std::vector<RevisitCandidate> lm = {candidate(7, {100, 100}, 5.0, a)};
@@ -54,10 +54,10 @@ TEST(MapMemory, AMatchIsTheLookAlikeInsideTheRegion) {
   EXPECT_TRUE(matchRevisits(lm, {FeatureObservation{2, {100, 100}, std::nullopt}}, p).empty());
 }
 
-TEST(MapMemory, TwoLookAlikesInOneRegionMatchNeither) {
+TEST(RevisitMatching, TwoLookAlikesInOneRegionMatchNeither) {
   // Repeated texture: two corners that both look like the landmark (the ratio test on the
   // landmark's side), or two landmarks that look like one corner (on the corner's side).
-  const MapMemoryParams p;
+  const MapReuseParams p;
   const Descriptor a = pattern(3);
   const std::vector<RevisitCandidate> one = {candidate(7, {100, 100}, 5.0, a)};
   EXPECT_TRUE(
@@ -71,7 +71,7 @@ TEST(MapMemory, TwoLookAlikesInOneRegionMatchNeither) {
   const std::vector<FeatureObservation> far_corners = {corner(1, {101, 100}, flipped(a, 10)),
                                                        corner(2, {199, 100}, flipped(a, 12))};
   EXPECT_TRUE(matchRevisits(apart, far_corners, p).empty());
-  MapMemoryParams in_region = p;  // (the ratio test over the regions only: both match)
+  MapReuseParams in_region = p;  // (the ratio test over the regions only: both match)
   in_region.distinct_in_view = false;
   EXPECT_EQ(matchRevisits(apart, far_corners, in_region).size(), 2u);
   // So does a look-alike among the image's other features (a track's appearance).
@@ -96,8 +96,8 @@ TEST(MapMemory, TwoLookAlikesInOneRegionMatchNeither) {
   EXPECT_EQ(best[0].track_id, 1);
 }
 
-TEST(MapMemory, ALandmarkKnownTooLooselyIsNotSearchedFor) {
-  MapMemoryParams p;
+TEST(RevisitMatching, ALandmarkKnownTooLooselyIsNotSearchedFor) {
+  MapReuseParams p;
   const Descriptor a = pattern(4);
   const std::vector<RevisitCandidate> wide = {candidate(7, {100, 100}, p.max_search_sigma_px * 1.1, a)};
   EXPECT_TRUE(matchRevisits(wide, {corner(1, {100, 100}, a)}, p).empty());
@@ -105,7 +105,7 @@ TEST(MapMemory, ALandmarkKnownTooLooselyIsNotSearchedFor) {
   EXPECT_EQ(matchRevisits(wide, {corner(1, {100, 100}, a)}, p).size(), 1u);
 }
 
-TEST(MapMemory, TheSearchRegionIsTheUpdatesInnovationCovariance) {
+TEST(RevisitMatching, TheSearchRegionIsTheUpdatesInnovationCovariance) {
   // predictWithCovariance gives h(x) and S = H P H^T + R with the update's own Jacobian: the
   // normalized innovation of an observation at uv + e is e^T S^-1 e, as the update gates it.
   std::mt19937_64 rng(21);
@@ -139,10 +139,10 @@ TEST(MapMemory, TheSearchRegionIsTheUpdatesInnovationCovariance) {
   EXPECT_GT(checked, 0);
 }
 
-TEST(MapMemory, APendingMatchAgreesWhileItsTrackStaysOnThePrediction) {
+TEST(RevisitMatching, APendingMatchAgreesWhileItsTrackStaysOnThePrediction) {
   // A match is believed only after its track has gone on landing where the landmark is predicted
   // (revisit_confirm_frames). S: a 1.5 px prediction, 1 px pixel noise, the update's 0.95 gate.
-  const MapMemoryParams p;
+  const MapReuseParams p;
   const Eigen::Matrix2d S = 1.5 * 1.5 * Eigen::Matrix2d::Identity();
   const Eigen::Vector2d first(2.0, -1.5);  // the filter's error of the moment: 1.7 sigma
   // The true point keeps that error, with pixel noise: it agrees.

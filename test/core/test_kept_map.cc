@@ -1,8 +1,10 @@
-// The map kept across runs (map_archive.h): its file round trip and refusals, the relocalization
+// The map kept across runs (map_reuse/kept_map.h): its file round trip and refusals, the relocalization
 // that places a filter's world in it (a known yaw and translation recovered from projections with
 // outliers; a tilted or sparse match refused), and EkfSlam::moveWorld, which moves every
 // navigation-frame quantity and its covariance with the world in every mechanization.
 #include <gtest/gtest.h>
+
+#include "scratch_dir.h"
 
 #include <cstdio>
 #include <filesystem>
@@ -11,7 +13,8 @@
 
 #include "test_helpers.h"
 #include "vi_ekf_slam/core/ekf_slam.h"
-#include "vi_ekf_slam/core/map_archive.h"
+#include "vi_ekf_slam/core/map_reuse/kept_map.h"
+#include "vi_ekf_slam/core/map_reuse/relocalization.h"
 #include "vi_ekf_slam/sim/sim_runner.h"
 
 namespace vi_ekf_slam {
@@ -36,7 +39,7 @@ std::vector<MapPoint> randomPoints(int n, std::mt19937_64& rng) {
   return pts;
 }
 
-std::string tempPath(const std::string& name) { return (std::filesystem::temp_directory_path() / name).string(); }
+std::string tempPath(const std::string& name) { return test::programScratch() / name; }
 
 Eigen::Isometry3d pose(const Mat3& R, const Vec3& p) {
   Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
@@ -49,7 +52,7 @@ Eigen::Isometry3d pose(const Mat3& R, const Vec3& p) {
 /// noise) as features carrying the points' descriptors, and `outliers` features whose descriptors
 /// are map points' but whose pixels are elsewhere.
 struct View {
-  MapArchive map;
+  KeptMap map;
   std::vector<FeatureObservation> features;
 };
 View viewOf(const Eigen::Isometry3d& T_m_b, const CameraModel& cam, const CameraExtrinsics& T_b_c, int points,
@@ -81,15 +84,15 @@ View viewOf(const Eigen::Isometry3d& T_m_b, const CameraModel& cam, const Camera
 
 }  // namespace
 
-TEST(MapArchive, SavesAndLoadsEveryValueOfItsPoints) {
+TEST(KeptMap, SavesAndLoadsEveryValueOfItsPoints) {
   std::mt19937_64 rng(3);
-  MapArchive a;
+  KeptMap a;
   a.merge(randomPoints(40, rng));
   for (const char* ext : {".yaml", ".json", ".yaml.gz"}) {
     const std::string path = tempPath(std::string("vi_ekf_slam_map_test") + ext);
     std::string err;
     ASSERT_TRUE(a.save(path, &err)) << err;
-    MapArchive b;
+    KeptMap b;
     ASSERT_TRUE(b.load(path, &err)) << err;
     ASSERT_EQ(b.size(), a.size()) << ext;
     for (int i = 0; i < a.size(); ++i) {
@@ -103,9 +106,9 @@ TEST(MapArchive, SavesAndLoadsEveryValueOfItsPoints) {
   }
 }
 
-TEST(MapArchive, RefusesAFileThatIsNotAMapAndKeepsItsPoints) {
+TEST(KeptMap, RefusesAFileThatIsNotAMapAndKeepsItsPoints) {
   std::mt19937_64 rng(4);
-  MapArchive a;
+  KeptMap a;
   a.merge(randomPoints(5, rng));
   std::string err;
   EXPECT_FALSE(a.load(tempPath("vi_ekf_slam_no_such_map.yaml"), &err));
@@ -122,9 +125,9 @@ TEST(MapArchive, RefusesAFileThatIsNotAMapAndKeepsItsPoints) {
   std::remove(truncated.c_str());
 }
 
-TEST(MapArchive, APointMappedAgainReplacesItsOldSelfAndTheOldestLeaveFirst) {
+TEST(KeptMap, APointMappedAgainReplacesItsOldSelfAndTheOldestLeaveFirst) {
   std::mt19937_64 rng(5);
-  MapArchive a(10);
+  KeptMap a(10);
   std::vector<MapPoint> first = randomPoints(8, rng);
   a.merge(first);
   std::vector<MapPoint> again = {first[2]};
@@ -149,7 +152,7 @@ TEST(Relocalization, RecoversTheYawAndTranslationBetweenTheWorlds) {
       pose(Eigen::AngleAxisd(0.61, Vec3::UnitZ()).toRotationMatrix(), Vec3(-4, 7, 0.3));
   const Eigen::Isometry3d T_n_b = T_m_n_true.inverse() * T_m_b;
   const View v = viewOf(T_m_b, cam, T_b_c, 60, 15, rng);
-  MapMemoryParams params;
+  MapReuseParams params;
   std::string why;
   const auto r = relocalize(v.map, v.features, cam, T_b_c, T_n_b, params, &why);
   ASSERT_TRUE(r) << why;
@@ -167,7 +170,7 @@ TEST(Relocalization, RefusesATiltedWorldAndTooFewMatches) {
   const CameraExtrinsics T_b_c = test::forwardCamera();
   const Eigen::Isometry3d T_m_b = pose(expSO3(Vec3(0.0, 0.0, 0.4)), Vec3(1.0, 1.0, 1.4));
   const View v = viewOf(T_m_b, cam, T_b_c, 40, 0, rng);
-  MapMemoryParams params;
+  MapReuseParams params;
   std::string why;
   // The filter's gravity 10 deg off the map's: no gravity-aligned world explains the view.
   const Eigen::Isometry3d tilted = pose(expSO3(Vec3(0.17, 0.0, 0.0)), Vec3::Zero()) * T_m_b;
@@ -177,7 +180,7 @@ TEST(Relocalization, RefusesATiltedWorldAndTooFewMatches) {
   const std::vector<FeatureObservation> few(v.features.begin(), v.features.begin() + 8);
   EXPECT_FALSE(relocalize(v.map, few, cam, T_b_c, T_m_b, params, &why));
   // Look-alikes: two map points with one descriptor fail the ratio test, so none is matched.
-  MapArchive twins = v.map;
+  KeptMap twins = v.map;
   std::vector<MapPoint> copies = twins.points();
   for (auto& p : copies) {
     p.id += 5000;
