@@ -3,7 +3,7 @@
 #include <benchmark/benchmark.h>
 
 #include "bench_fixtures.h"
-#include "vi_ekf_slam/core/allocator_tuning.h"
+#include "vi_ekf_slam/platform/allocator_tuning.h"
 #include "vi_ekf_slam/core/ekf_slam.h"
 #include "vi_ekf_slam/core/frame_change.h"
 #include "vi_ekf_slam/core/imu_propagation.h"
@@ -13,7 +13,7 @@ using vi_ekf_slam::bench::MapFixture;
 
 namespace {
 
-// As in the node and the tools (core/allocator_tuning.h): large buffers stay in the heap.
+// As in the node and the tools (platform/allocator_tuning.h): large buffers stay in the heap.
 const bool kAllocatorTuned = tuneAllocatorForLargeBuffers();
 
 constexpr Mechanization kSc = Mechanization::kSensorCentricComposition;

@@ -6,7 +6,7 @@
 
 #include <random>
 
-#include "vi_ekf_slam/core/dynamic_initializer.h"
+#include "vi_ekf_slam/core/dynamic_init/dynamic_initializer.h"
 #include "vi_ekf_slam/core/imu_propagation.h"
 #include "vi_ekf_slam/sim/camera_simulator.h"
 #include "vi_ekf_slam/sim/scenarios.h"

@@ -8,7 +8,7 @@
 #include <opencv2/imgcodecs.hpp>
 
 #include "vi_ekf_slam/core/feature_tracker.h"
-#include "vi_ekf_slam/eval/datasets.h"
+#include "vi_ekf_slam/io/datasets.h"
 #include "vi_ekf_slam/sim/renderer.h"
 #include "vi_ekf_slam/sim/scenarios.h"
 
@@ -51,8 +51,8 @@ const Sequence* eurocSequence() {
     const std::string cam = std::string(dir) + "/euroc_v1_01_micro/mav0/cam0";
     if (!std::ifstream(cam + "/sensor.yaml")) return nullptr;
     auto s = std::make_unique<Sequence>();
-    s->camera = CameraModel(eval::readAslCamera(cam + "/sensor.yaml").intrinsics);
-    for (const auto& im : eval::readAslImages(cam)) {
+    s->camera = CameraModel(io::readAslCamera(cam + "/sensor.yaml").intrinsics);
+    for (const auto& im : io::readAslImages(cam)) {
       s->frames.push_back(cv::imread(im.path, cv::IMREAD_GRAYSCALE));
       s->R_cur_prev.push_back(Eigen::Matrix3d::Identity());  // the MAV stands still
     }

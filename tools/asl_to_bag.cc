@@ -16,7 +16,7 @@
 #include <opencv2/imgcodecs.hpp>
 
 #include "cli.h"
-#include "vi_ekf_slam/eval/datasets.h"
+#include "vi_ekf_slam/io/datasets.h"
 #include "vi_ekf_slam/ros/bag_io.h"
 
 using namespace vi_ekf_slam;
@@ -43,23 +43,23 @@ int main(int argc, char** argv) {
   if (!(start >= 0.0)) cli::fail(usage, "--start must be >= 0");
   if (!(duration >= 0.0)) cli::fail(usage, "--duration must be >= 0");
   try {
-    const eval::AslCamera cam = eval::readAslCamera(asl + "/cam0/sensor.yaml");
-    const ImuNoiseParams noise = eval::readAslImuNoise(asl + "/imu0/sensor.yaml");
-    std::vector<eval::AslImage> images = eval::readAslImages(asl + "/cam0");
+    const io::AslCamera cam = io::readAslCamera(asl + "/cam0/sensor.yaml");
+    const ImuNoiseParams noise = io::readAslImuNoise(asl + "/imu0/sensor.yaml");
+    std::vector<io::AslImage> images = io::readAslImages(asl + "/cam0");
     if (start > 0.0 && !images.empty()) {
       const double t_cut = images.front().t + start;
       images.erase(images.begin(),
-                   std::find_if(images.begin(), images.end(), [&](const eval::AslImage& i) { return i.t >= t_cut; }));
+                   std::find_if(images.begin(), images.end(), [&](const io::AslImage& i) { return i.t >= t_cut; }));
     }
     if (duration > 0.0 && !images.empty()) {
       const double t_end = images.front().t + duration;
-      images.erase(std::find_if(images.begin(), images.end(), [&](const eval::AslImage& i) { return i.t > t_end; }),
+      images.erase(std::find_if(images.begin(), images.end(), [&](const io::AslImage& i) { return i.t > t_end; }),
                    images.end());
     }
-    const std::vector<ImuData> imu = eval::readAslImu(asl + "/imu0/data.csv");
-    std::vector<eval::AslState> gt;
+    const std::vector<ImuData> imu = io::readAslImu(asl + "/imu0/data.csv");
+    std::vector<io::AslState> gt;
     try {
-      gt = eval::readAslGroundTruth(asl + "/state_groundtruth_estimate0/data.csv");
+      gt = io::readAslGroundTruth(asl + "/state_groundtruth_estimate0/data.csv");
     } catch (const std::runtime_error& e) {
       std::cerr << "warning: no ground truth (" << e.what() << ")\n";
     }

@@ -32,7 +32,7 @@ int main(int argc, char** argv) {
   }
   std::filesystem::create_directories(out);
   for (const std::string& kind : kinds) {
-    std::vector<eval::StampedPose> poses;
+    std::vector<io::StampedPose> poses;
     try {
       poses = sim::generatedWalk(kind);
     } catch (const std::invalid_argument& e) {
@@ -41,7 +41,7 @@ int main(int argc, char** argv) {
       cli::fail(usage, std::string(e.what()) + "; known:" + known);
     }
     const std::string path = out + "/" + kind + ".txt";
-    eval::writeTum(path, poses, "t x y z qx qy qz qw (vi_ekf_slam_make_walks " + kind + "; z up, body x forward)");
+    io::writeTum(path, poses, "t x y z qx qy qz qw (vi_ekf_slam_make_walks " + kind + "; z up, body x forward)");
     std::vector<Vec3> p;
     for (const auto& x : poses) p.push_back(x.p);
     std::printf("%s: %.0f s, %.0f m -> %s\n", kind.c_str(), poses.back().t, eval::pathLength(p), path.c_str());

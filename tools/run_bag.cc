@@ -17,12 +17,12 @@
 #include <ros/package.h>
 #include <sstream>
 
-#include "vi_ekf_slam/eval/datasets.h"
+#include "vi_ekf_slam/io/datasets.h"
 #include "vi_ekf_slam/eval/progress.h"
 #include "vi_ekf_slam/eval/reference_comparison.h"
 #include "vi_ekf_slam/eval/run_evaluation.h"
 #include "vi_ekf_slam/eval/run_health.h"
-#include "vi_ekf_slam/eval/tum_io.h"
+#include "vi_ekf_slam/io/tum_io.h"
 #include "vi_ekf_slam/ros/bag_io.h"
 #include "vi_ekf_slam/ros/bag_replay.h"
 #include "vi_ekf_slam/ros/console_progress.h"
@@ -38,17 +38,17 @@ struct Reference {
   std::string path, frame, clock;
   eval::Alignment alignment = eval::Alignment::kSim3;
   double from_s = 0.0;  ///< compare from this long after the bag's start [s]
-  std::vector<eval::StampedPose> poses;
+  std::vector<io::StampedPose> poses;
 };
 
 /// The estimate as the reference sees it: the camera's poses (through the bag's extrinsic) or the
 /// body's, stamped on the IMU clock or on the camera clock (minus the estimated time offset).
-std::vector<eval::StampedPose> referenceView(const glue::RecordingSink& sink, const glue::InputBagInfo& info,
-                                             const std::string& frame, const std::string& clock) {
+std::vector<io::StampedPose> referenceView(const glue::RecordingSink& sink, const glue::InputBagInfo& info,
+                                           const std::string& frame, const std::string& clock) {
   if (frame == "camera" && !info.T_b_c) throw std::runtime_error("the bag has no camera-IMU extrinsic");
   std::map<double, double> offset_at;
   for (const auto& r : sink.trace) offset_at[r.t] = r.time_offset_s;
-  std::vector<eval::StampedPose> poses;
+  std::vector<io::StampedPose> poses;
   std::vector<double> offsets;
   for (const auto& p : sink.poses) {
     poses.push_back({p.t, p.p, p.q, std::nullopt});
@@ -145,7 +145,7 @@ std::vector<Reference> readReferences(const Options& o) {
     r.from_s = std::strtod(from.c_str(), &end);
     if (from.empty() || *end != '\0' || !std::isfinite(r.from_s) || r.from_s < 0.0)
       throw std::runtime_error("--reference-from-s takes seconds >= 0");
-    r.poses = eval::readTrajectoryFile(r.path);  // TUM, or EuRoC's ground-truth CSV
+    r.poses = io::readTrajectoryFile(r.path);  // TUM, or EuRoC's ground-truth CSV
     refs.push_back(std::move(r));
   }
   return refs;
@@ -193,11 +193,11 @@ nlohmann::ordered_json compareRun(const glue::RecordingSink& sink, const glue::I
     return j;
   }
   try {
-    std::vector<eval::StampedPose> view = referenceView(sink, info, ref.frame, ref.clock);
+    std::vector<io::StampedPose> view = referenceView(sink, info, ref.frame, ref.clock);
     if (ref.from_s > 0.0) {
       j["from_s"] = ref.from_s;
       const double from = info.start + ref.from_s;
-      view.erase(std::remove_if(view.begin(), view.end(), [&](const eval::StampedPose& p) { return p.t < from; }),
+      view.erase(std::remove_if(view.begin(), view.end(), [&](const io::StampedPose& p) { return p.t < from; }),
                  view.end());
     }
     const eval::ReferenceComparison c = eval::compareWithReference(view, ref.poses, ref.alignment);
@@ -310,16 +310,16 @@ void runOne(const Options& o, const std::string& mechanization, const glue::Inpu
     if (!saved) throw std::runtime_error("--save-map: " + message);
   }
   fs::create_directories(o.out);
-  std::vector<eval::StampedPose> traj;
+  std::vector<io::StampedPose> traj;
   for (const auto& p : sink.poses) traj.push_back({p.t, p.p, p.q, p.cov});
-  eval::writeTum(o.out + "/" + name + ".tum", traj,
-                 "t x y z qx qy qz qw (body in the continuous odom frame, IMU clock; resets in " + name +
-                     "_events.csv, covariances in " + name + "_covariance.txt)");
-  eval::writePoseCovariances(o.out + "/" + name + "_covariance.txt", traj);
+  io::writeTum(o.out + "/" + name + ".tum", traj,
+               "t x y z qx qy qz qw (body in the continuous odom frame, IMU clock; resets in " + name +
+                   "_events.csv, covariances in " + name + "_covariance.txt)");
+  io::writePoseCovariances(o.out + "/" + name + "_covariance.txt", traj);
   writeEvents(o.out + "/" + name + "_events.csv", sink);
   for (size_t k = 0; k < sink.segments.size(); ++k) {
-    eval::writeTum(o.out + "/" + name + "_segment_" + std::to_string(k) + ".tum", sink.segments[k],
-                   "t x y z qx qy qz qw (body in the filter's world after reset " + std::to_string(k) + ", IMU clock)");
+    io::writeTum(o.out + "/" + name + "_segment_" + std::to_string(k) + ".tum", sink.segments[k],
+                 "t x y z qx qy qz qw (body in the filter's world after reset " + std::to_string(k) + ", IMU clock)");
   }
   nlohmann::ordered_json& h = health->runs.rows[name] = eval::runHealth(sink.trace, sink.resets, bag_s, wall);
   h["output_s"] = sink.poses.size() > 1 ? sink.poses.back().t - sink.poses.front().t : 0.0;

@@ -23,12 +23,12 @@ int main(int argc, char** argv) {
   cli::parse(argc, argv, usage,
              "Real feature tracks + real IMU (EuRoC V1_01, 30 s) through the core for every configuration.", opts);
   if (gate != 0.0 && !(gate > 0.0 && gate < 1.0)) cli::fail(usage, "--gate must be in (0, 1)");
-  eval::FeatureTrackData data;
-  std::vector<eval::StampedPose> truth;
+  io::FeatureTrackData data;
+  std::vector<io::StampedPose> truth;
   try {
-    data = eval::readEqvioCsv(data_dir + "/euroc_v1_01_features/eqvio_processed_30s.csv");
-    truth = eval::toStampedPoses(
-        eval::readAslGroundTruth(data_dir + "/euroc_v1_01_micro/mav0/state_groundtruth_estimate0/data.csv"));
+    data = io::readEqvioCsv(data_dir + "/euroc_v1_01_features/eqvio_processed_30s.csv");
+    truth = io::toStampedPoses(
+        io::readAslGroundTruth(data_dir + "/euroc_v1_01_micro/mav0/state_groundtruth_estimate0/data.csv"));
   } catch (const std::exception& e) {
     std::cerr << "error: " << e.what() << "\n";
     return 1;

@@ -21,9 +21,9 @@
 #include <vector>
 
 #include "cli.h"
-#include "vi_ekf_slam/core/allocator_tuning.h"
+#include "vi_ekf_slam/platform/allocator_tuning.h"
 #include "vi_ekf_slam/sim/loop_walk.h"
-#include "vi_ekf_slam/sim/monte_carlo.h"
+#include "vi_ekf_slam/eval/monte_carlo.h"
 
 using namespace vi_ekf_slam;
 namespace fs = std::filesystem;
@@ -124,7 +124,7 @@ int main(int argc, char** argv) {
     double rss0 = 0.0;  // after the IMU stream was synthesized and the first image processed
     std::mt19937_64 rng(seed);
     const NavState init =
-        sim::drawInitialEstimate(sim::trueNavState(*sc.trajectory, sc.trajectory->startTime()), c.initial, rng);
+        eval::drawInitialEstimate(sim::trueNavState(*sc.trajectory, sc.trajectory->startTime()), c.initial, rng);
     int frame = 0;
     std::vector<FaultRecord> fault_errors(sc.faults.size());
     double last_err = std::nan("");

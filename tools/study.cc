@@ -33,9 +33,9 @@
 
 #include "cli.h"
 #include "vi_ekf_slam/eval/report.h"
-#include "vi_ekf_slam/sim/monte_carlo.h"
-#include "vi_ekf_slam/core/allocator_tuning.h"
-#include "vi_ekf_slam/eval/datasets.h"
+#include "vi_ekf_slam/eval/monte_carlo.h"
+#include "vi_ekf_slam/platform/allocator_tuning.h"
+#include "vi_ekf_slam/io/datasets.h"
 #include "vi_ekf_slam/sim/openvins_preset.h"
 #include "vi_ekf_slam/sim/recorded_imu.h"
 #include "vi_ekf_slam/sim/scenarios.h"
@@ -236,7 +236,7 @@ EkfSlamConfig withStudyOptions(EkfSlamConfig c, const Options& o, const sim::Sce
   if (!o.depth_prior.empty()) c.inverse_depth_scene_prior = o.depth_prior == "scene";
   if (!o.landmark_entry.empty()) c.triangulation.enabled = o.landmark_entry == "triangulated";
   // The recorded IMU is EuRoC's MAV: standing on the ground it does not sway like a pedestrian.
-  if (!o.imu.empty()) c.zero_velocity.velocity_sigma_mps = eval::kEurocMavStandingVelocitySigma;
+  if (!o.imu.empty()) c.zero_velocity.velocity_sigma_mps = io::kEurocMavStandingVelocitySigma;
   if (o.gate > 0.0) c.update.gate_probability = o.gate;
   if (o.estimate_extrinsic) c.estimate_extrinsic = true;
   if (!o.map.empty()) c.map.within_run = o.map == "keep";
@@ -329,7 +329,7 @@ void writeCsvRow(std::ofstream& f, std::initializer_list<Vec3> vs) {
 /// nees_runs.csv: every run's position, orientation and pose NEES per camera time (run0.csv has
 /// run 0's full errors, runN.csv run N's with --all-runs); shows whether a run-averaged NEES is
 /// carried by a few runs.
-void writeRunNees(const fs::path& dir, const std::vector<sim::RunResult>& runs) {
+void writeRunNees(const fs::path& dir, const std::vector<eval::RunResult>& runs) {
   std::ofstream f(dir / "nees_runs.csv");
   f << "t";
   for (const char* kind : {"pose", "p", "q"})
@@ -349,7 +349,7 @@ void writeRunNees(const fs::path& dir, const std::vector<sim::RunResult>& runs) 
 
 /// runN.csv: run N's errors (true - estimate) and sigmas per camera time, with the frame's map
 /// and update counts; landmarks_runN.csv: its last estimate of every landmark against the truth.
-void writeRunFiles(const fs::path& dir, const sim::RunResult& run, size_t index, const sim::Scenario& sc) {
+void writeRunFiles(const fs::path& dir, const eval::RunResult& run, size_t index, const sim::Scenario& sc) {
   std::ofstream r(dir / ("run" + std::to_string(index) + ".csv"));
   r << "t,px,py,pz,ex,ey,ez,tx,ty,tz";
   writeCsvHeader(r, {"e_p", "s_p", "e_q", "s_q", "e_v", "s_v", "e_ba", "s_ba", "e_bg", "s_bg", "e_p_sb", "s_p_sb",
@@ -378,7 +378,7 @@ void writeRunFiles(const fs::path& dir, const sim::RunResult& run, size_t index,
 }
 
 /// all_runs: runN.csv for every run, else for run 0 only.
-void writeConfigFiles(const fs::path& dir, const sim::ConsistencySummary& s, const std::vector<sim::RunResult>& runs,
+void writeConfigFiles(const fs::path& dir, const eval::ConsistencySummary& s, const std::vector<eval::RunResult>& runs,
                       const sim::Scenario& sc, bool all_runs) {
   fs::create_directories(dir);
   writeRunNees(dir, runs);
@@ -445,7 +445,7 @@ sim::Scenario loadScenario(const Options& o, std::string* name) {
   } else if (!o.imu.empty()) {
     if (o.trajectory == "builtin") usage("--imu needs the ground truth of the same recording as --trajectory");
     sc = sim::recordedImuScenario(o.trajectory, o.imu, o.per_metre, o.seed);
-    if (o.imu_noise == "euroc_mav") sc.imu.noise = eval::eurocMavImuNoise();
+    if (o.imu_noise == "euroc_mav") sc.imu.noise = io::eurocMavImuNoise();
     *name = fs::path(o.trajectory).filename().string() + " + recorded IMU";
   } else if (o.trajectory == "builtin") {
     sc = sim::hallwayScenario(sim::HallwayParams(), o.density, o.seed);
@@ -502,10 +502,10 @@ using Configs = std::vector<std::pair<std::string, EkfSlamConfig>>;
 
 /// All (configuration, run) jobs on a small thread pool. Run r uses seed + r for every
 /// configuration (common random numbers: the same noise for each filter).
-std::vector<std::vector<sim::RunResult>> runAll(const Options& o, const Configs& configs,
-                                                const std::vector<sim::Scenario>& scenarios) {
-  std::vector<std::vector<sim::RunResult>> results(configs.size(),
-                                                   std::vector<sim::RunResult>(static_cast<size_t>(o.runs)));
+std::vector<std::vector<eval::RunResult>> runAll(const Options& o, const Configs& configs,
+                                                 const std::vector<sim::Scenario>& scenarios) {
+  std::vector<std::vector<eval::RunResult>> results(configs.size(),
+                                                    std::vector<eval::RunResult>(static_cast<size_t>(o.runs)));
   std::atomic<int> next{0};
   std::mutex print_mutex;
   const int jobs = static_cast<int>(configs.size()) * o.runs;
@@ -514,7 +514,7 @@ std::vector<std::vector<sim::RunResult>> runAll(const Options& o, const Configs&
       const size_t c = static_cast<size_t>(j / o.runs);
       const size_t r = static_cast<size_t>(j % o.runs);
       results[c][r] =
-          sim::runMonteCarloRun(scenarios[r % scenarios.size()], configs[c].second, o.seed * 1000003ULL + r);
+          eval::runMonteCarloRun(scenarios[r % scenarios.size()], configs[c].second, o.seed * 1000003ULL + r);
       std::lock_guard<std::mutex> lock(print_mutex);
       std::fprintf(stderr, "\r  %d/%d runs done", j + 1, jobs);
     }
@@ -530,7 +530,7 @@ std::vector<std::vector<sim::RunResult>> runAll(const Options& o, const Configs&
 /// (non-finite: null); for dynamic starts, their delays.
 eval::Report summaryReport(const Options& o, const std::string& traj_name, const sim::Scenario& sc,
                            const std::vector<double>& offsets, double duration, const Configs& configs,
-                           const std::vector<sim::ConsistencySummary>& sums) {
+                           const std::vector<eval::ConsistencySummary>& sums) {
   eval::Report r;
   r.tool = "study";
   std::ostringstream title;
@@ -615,7 +615,7 @@ eval::Report summaryReport(const Options& o, const std::string& traj_name, const
         {"within_1_5_s", "within 1.5 s", 0},
         {"delay_mean_s", "delay mean [s]", 2},
         {"delay_max_s", "delay max [s]", 2},
-        {"nees_pose_first_10s", "NEES pose, first " + std::to_string(static_cast<int>(sim::kEarlyWindowS)) + " s", 2}};
+        {"nees_pose_first_10s", "NEES pose, first " + std::to_string(static_cast<int>(eval::kEarlyWindowS)) + " s", 2}};
     for (const auto& s : sums) {
       double sum = 0.0, worst = 0.0;
       int fast = 0;
@@ -681,9 +681,9 @@ int main(int argc, char** argv) {
     w << "id,x,y,z\n";
     for (const auto& l : sc.world) w << l.id << "," << l.p_n.x() << "," << l.p_n.y() << "," << l.p_n.z() << "\n";
   }
-  std::vector<sim::ConsistencySummary> sums;
+  std::vector<eval::ConsistencySummary> sums;
   for (size_t c = 0; c < configs.size(); ++c) {
-    sums.push_back(sim::summarize(configs[c].first, results[c]));
+    sums.push_back(eval::summarize(configs[c].first, results[c]));
     writeConfigFiles(out / configs[c].first, sums.back(), results[c], sc, o.all_runs);
   }
   const eval::Report report = summaryReport(o, traj_name, sc, offsets, duration, configs, sums);

@@ -11,8 +11,8 @@ namespace vi_ekf_slam::eval {
 
 EkfSlamConfig eurocFeatureReplayConfig() {
   EkfSlamConfig c;
-  c.imu_noise = eurocMavImuNoise();  // datasheet densities inflated as EqVIO's settings do (6x accel)
-  c.zero_velocity.velocity_sigma_mps = kEurocMavStandingVelocitySigma;
+  c.imu_noise = io::eurocMavImuNoise();  // datasheet densities inflated as EqVIO's settings do (6x accel)
+  c.zero_velocity.velocity_sigma_mps = io::kEurocMavStandingVelocitySigma;
   c.update.pixel_noise_px = 2.0;
   c.landmark_timeout_s = 0.1;  // a lost track never comes back
   c.max_landmarks = 100;
@@ -58,7 +58,7 @@ class ReplayRecorder : public PipelineListener {
 };
 }  // namespace
 
-FeatureReplayResult replayFeatures(const FeatureTrackData& data, const std::vector<StampedPose>& truth,
+FeatureReplayResult replayFeatures(const io::FeatureTrackData& data, const std::vector<io::StampedPose>& truth,
                                    const EkfSlamConfig& config, const StaticInitParams& static_params) {
   FeatureReplayResult out;
   ReplayRecorder recorder(&out);

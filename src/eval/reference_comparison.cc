@@ -28,16 +28,16 @@ std::string toString(Alignment a) {
   return "unknown";
 }
 
-std::vector<StampedPose> referenceView(const std::vector<StampedPose>& body_poses,
-                                       const std::optional<CameraExtrinsics>& T_b_c,
-                                       const std::vector<double>* time_offsets_s) {
+std::vector<io::StampedPose> referenceView(const std::vector<io::StampedPose>& body_poses,
+                                           const std::optional<CameraExtrinsics>& T_b_c,
+                                           const std::vector<double>* time_offsets_s) {
   if (time_offsets_s && time_offsets_s->size() != body_poses.size()) {
     throw std::invalid_argument("referenceView: one time offset per pose");
   }
-  std::vector<StampedPose> out;
+  std::vector<io::StampedPose> out;
   out.reserve(body_poses.size());
   for (size_t i = 0; i < body_poses.size(); ++i) {
-    StampedPose s = body_poses[i];
+    io::StampedPose s = body_poses[i];
     s.cov.reset();
     if (T_b_c) {
       s.p = s.p + s.q * T_b_c->p_b_c;
@@ -49,15 +49,15 @@ std::vector<StampedPose> referenceView(const std::vector<StampedPose>& body_pose
   return out;
 }
 
-ReferenceComparison compareWithReference(const std::vector<StampedPose>& estimate,
-                                         const std::vector<StampedPose>& reference, Alignment alignment,
+ReferenceComparison compareWithReference(const std::vector<io::StampedPose>& estimate,
+                                         const std::vector<io::StampedPose>& reference, Alignment alignment,
                                          double max_gap_s) {
   ReferenceComparison out;
   out.alignment = alignment;
   std::vector<Vec3> p_ref;
   std::vector<Quat> q_ref, q_est;
   for (const auto& e : estimate) {
-    const std::optional<StampedPose> r = interpolatePose(reference, e.t, max_gap_s);
+    const std::optional<io::StampedPose> r = io::interpolatePose(reference, e.t, max_gap_s);
     if (!r) continue;
     out.t.push_back(e.t);
     out.estimate.push_back(e.p);

@@ -19,20 +19,20 @@ namespace {
 
 /// The truth at time t (interpolated within 0.2 s): the estimates are stamped at the state's time
 /// (image stamp + estimated time offset), which need not be a truth stamp.
-std::optional<StampedPose> truthAt(const std::vector<StampedPose>& truth, double t) {
-  return interpolatePose(truth, t, 0.2);
+std::optional<io::StampedPose> truthAt(const std::vector<io::StampedPose>& truth, double t) {
+  return io::interpolatePose(truth, t, 0.2);
 }
 
 }  // namespace
 
-RunMetrics evaluateRun(const std::vector<EstimatedPose>& est, const std::vector<StampedPose>& truth,
+RunMetrics evaluateRun(const std::vector<EstimatedPose>& est, const std::vector<io::StampedPose>& truth,
                        const std::vector<EstimatedLandmark>& landmarks, const LandmarkTruth& landmark_truth) {
   RunMetrics m;
   // Registration at the first estimate with a truth pose.
   size_t first = 0;
   while (first < est.size() && !truthAt(truth, est[first].t)) ++first;
   if (first == est.size()) return m;
-  const std::optional<StampedPose> g0 = truthAt(truth, est[first].t);
+  const std::optional<io::StampedPose> g0 = truthAt(truth, est[first].t);
   const Eigen::Isometry3d T_true_est = registrationAtFirstPose(est[first].p, est[first].q, g0->p, g0->q);
   const Quat R(T_true_est.linear());
   Eigen::Matrix<double, 6, 6> G = Eigen::Matrix<double, 6, 6>::Zero();
@@ -43,7 +43,7 @@ RunMetrics evaluateRun(const std::vector<EstimatedPose>& est, const std::vector<
   std::vector<double> q_deg, np, nq, npose, ms, tracker_ms;
   int inside = 0;
   for (size_t i = first; i < est.size(); ++i) {
-    const std::optional<StampedPose> g = truthAt(truth, est[i].t);
+    const std::optional<io::StampedPose> g = truthAt(truth, est[i].t);
     if (!g) continue;
     RunFrame f;
     f.t = est[i].t;

@@ -105,7 +105,7 @@ InputBagInfo readInputBag(const std::string& path, const RigTopics& topics) {
   info.end = all.getEndTime().toSec();
   for (const rosbag::MessageInstance& m : view) {
     if (auto g = m.instantiate<geometry_msgs::PoseStamped>()) {
-      eval::StampedPose p;
+      io::StampedPose p;
       p.t = g->header.stamp.toSec();
       tf2::fromMsg(g->pose.position, p.p);
       tf2::fromMsg(g->pose.orientation, p.q);
@@ -132,11 +132,11 @@ eval::LandmarkTruth landmarkTruthFromWorld(const InputBagInfo& info) {
   if (info.world.empty() || !info.camera || !info.T_b_c) return {};
   const CameraModel camera(*info.camera);
   const CameraExtrinsics T = *info.T_b_c;
-  const std::vector<eval::StampedPose>& truth = info.truth;
+  const std::vector<io::StampedPose>& truth = info.truth;
   const std::vector<sim::Quad>& world = info.world;
   return [camera, T, &truth, &world](const eval::EstimatedLandmark& l) -> std::optional<Vec3> {
     auto it = std::lower_bound(truth.begin(), truth.end(), l.birth_time - 1e-3,
-                               [](const eval::StampedPose& p, double x) { return p.t < x; });
+                               [](const io::StampedPose& p, double x) { return p.t < x; });
     if (it == truth.end() || std::abs(it->t - l.birth_time) > 1e-3) return std::nullopt;
     Eigen::Vector2d xn;
     if (!camera.pixelToNormalized(l.birth_uv, &xn)) return std::nullopt;

@@ -7,7 +7,7 @@
 #include <stdexcept>
 #include <tf2/exceptions.h>
 
-#include "vi_ekf_slam/core/allocator_tuning.h"
+#include "vi_ekf_slam/platform/allocator_tuning.h"
 #include "vi_ekf_slam/core/frames.h"
 #include "vi_ekf_slam/ros/conversions.h"
 

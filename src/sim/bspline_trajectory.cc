@@ -26,7 +26,7 @@ Basis cumulativeBasis(double u) {
 
 }  // namespace
 
-BsplineTrajectory::BsplineTrajectory(const std::vector<eval::StampedPose>& poses, double knot_spacing_s)
+BsplineTrajectory::BsplineTrajectory(const std::vector<io::StampedPose>& poses, double knot_spacing_s)
     : dt_(knot_spacing_s) {
   if (!(knot_spacing_s > 0.0)) throw std::invalid_argument("B-spline knot spacing must be > 0");
   if (poses.size() < 4) throw std::invalid_argument("trajectory needs at least 4 poses");
@@ -89,14 +89,14 @@ TrajectorySample BsplineTrajectory::sample(double t) const {
   return s;
 }
 
-eval::StampedPose worldZUpToNav(const eval::StampedPose& pose_w) {
-  eval::StampedPose p = pose_w;
+io::StampedPose worldZUpToNav(const io::StampedPose& pose_w) {
+  io::StampedPose p = pose_w;
   navToZUpWorld(pose_w.p, pose_w.q, &p.p, &p.q);  // the map is its own inverse
   return p;
 }
 
 std::shared_ptr<BsplineTrajectory> loadTumTrajectory(const std::string& path, double knot_spacing_s) {
-  std::vector<eval::StampedPose> poses = eval::readTum(path);
+  std::vector<io::StampedPose> poses = io::readTum(path);
   if (poses.size() < 4) {
     throw std::runtime_error(path + ": only " + std::to_string(poses.size()) + " poses; a trajectory needs at least 4");
   }

@@ -19,7 +19,7 @@ void Gait::advance(double v, double dt) {
   phase_ += 2.0 * M_PI * cadence * dt;
 }
 
-eval::StampedPose Gait::pose(double t, Vec3 centre, double heading, double v) const {
+io::StampedPose Gait::pose(double t, Vec3 centre, double heading, double v) const {
   const double a = std::min(v / p_.cruise_speed_mps, p_.max_amplitude);
   const double still = 1.0 - std::clamp(v / 0.3, 0.0, 1.0);
   const Vec3 side(-std::sin(heading), std::cos(heading), 0.0);
@@ -31,7 +31,7 @@ eval::StampedPose Gait::pose(double t, Vec3 centre, double heading, double v) co
   const double roll = a * p_.roll_sway_rad * std::sin(0.5 * phase_);
   const double pitch =
       a * p_.pitch_bob_rad * std::sin(phase_) + still * p_.postural_pitch_rad * std::sin(2.0 * M_PI * f2_hz_ * t + 1.0);
-  eval::StampedPose sp;
+  io::StampedPose sp;
   sp.t = t;
   sp.p = centre;
   sp.q = Quat(Eigen::AngleAxisd(yaw, Vec3::UnitZ()) * Eigen::AngleAxisd(pitch, Vec3::UnitY()) *

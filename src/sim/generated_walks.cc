@@ -124,7 +124,7 @@ struct WalkSpec {
 
 /// Samples the walk at 100 Hz: the centreline at the distance walked, its heading from the tangent
 /// (over +-0.3 m, continuous over laps), the gait about it.
-std::vector<eval::StampedPose> sample(const WalkSpec& w) {
+std::vector<io::StampedPose> sample(const WalkSpec& w) {
   const ArcLengthPath path(w.path);
   GaitParams g;
   g.cruise_speed_mps = kCruiseMps;
@@ -133,7 +133,7 @@ std::vector<eval::StampedPose> sample(const WalkSpec& w) {
   g.postural_sway_m = 0.004;
   g.postural_pitch_rad = 0.004;
   Gait gait(g, w.seed);
-  std::vector<eval::StampedPose> poses;
+  std::vector<io::StampedPose> poses;
   double s = 0.0, v_prev = w.speed(0.0), heading = 0.0;
   for (int i = 0; i / kRateHz < w.duration_s; ++i) {
     const double t = i / kRateHz, v = w.speed(t);
@@ -259,6 +259,6 @@ std::vector<std::string> generatedWalkKinds(bool suite_only) {
   return kinds;
 }
 
-std::vector<eval::StampedPose> generatedWalk(const std::string& kind) { return sample(spec(kind)); }
+std::vector<io::StampedPose> generatedWalk(const std::string& kind) { return sample(spec(kind)); }
 
 }  // namespace vi_ekf_slam::sim

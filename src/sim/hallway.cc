@@ -110,7 +110,7 @@ std::vector<Quad> hallwayGeometry(const HallwayParams& p) {
 
 std::shared_ptr<BsplineTrajectory> pedestrianWalk(const HallwayParams& p) {
   const Centerline c = centerline(p);
-  std::vector<eval::StampedPose> poses;
+  std::vector<io::StampedPose> poses;
   const double dt = 0.01;
   GaitParams g = p.gait;
   g.cruise_speed_mps = p.speed_mps;

@@ -48,7 +48,7 @@ void onLoop(const LoopParams& l, double s, Vec3* p, double* yaw) {
 }  // namespace
 
 std::shared_ptr<BsplineTrajectory> loopWalk(const HallwayParams& g, const LoopParams& l) {
-  std::vector<eval::StampedPose> poses;
+  std::vector<io::StampedPose> poses;
   const double dt = 0.05, ramp = 1.0;
   GaitParams gp = g.gait;
   gp.cruise_speed_mps = g.speed_mps;

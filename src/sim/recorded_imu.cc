@@ -6,7 +6,7 @@
 #include <fstream>
 #include <limits>
 
-#include "vi_ekf_slam/eval/datasets.h"
+#include "vi_ekf_slam/io/datasets.h"
 #include "vi_ekf_slam/sim/bspline_trajectory.h"
 #include "vi_ekf_slam/sim/hallway.h"
 #include "vi_ekf_slam/sim/scenarios.h"
@@ -27,16 +27,16 @@ bool isAslGroundTruth(const std::string& path) {
 }
 
 /// Linear interpolation of the ground-truth biases at time t (clamped at the ends).
-void biasesAt(const std::vector<eval::AslState>& gt, double t, Vec3* b_a, Vec3* b_g) {
-  auto it = std::lower_bound(gt.begin(), gt.end(), t, [](const eval::AslState& s, double x) { return s.t < x; });
+void biasesAt(const std::vector<io::AslState>& gt, double t, Vec3* b_a, Vec3* b_g) {
+  auto it = std::lower_bound(gt.begin(), gt.end(), t, [](const io::AslState& s, double x) { return s.t < x; });
   if (it == gt.begin() || it == gt.end()) {
-    const eval::AslState& s = it == gt.end() ? gt.back() : gt.front();
+    const io::AslState& s = it == gt.end() ? gt.back() : gt.front();
     *b_a = s.b_a;
     *b_g = s.b_g;
     return;
   }
-  const eval::AslState& a = *(it - 1);
-  const eval::AslState& b = *it;
+  const io::AslState& a = *(it - 1);
+  const io::AslState& b = *it;
   const double w = (t - a.t) / std::max(1e-12, b.t - a.t);
   *b_a = (1.0 - w) * a.b_a + w * b.b_a;
   *b_g = (1.0 - w) * a.b_g + w * b.b_g;
@@ -47,13 +47,13 @@ void biasesAt(const std::vector<eval::AslState>& gt, double t, Vec3* b_a, Vec3* 
 Scenario recordedImuScenario(const std::string& trajectory_path, const std::string& imu_csv, double per_metre,
                              std::uint64_t world_seed) {
   Scenario sc;
-  std::vector<eval::AslState> gt;
-  std::vector<eval::StampedPose> poses;
+  std::vector<io::AslState> gt;
+  std::vector<io::StampedPose> poses;
   if (isAslGroundTruth(trajectory_path)) {
-    gt = eval::readAslGroundTruth(trajectory_path);
-    poses = eval::toStampedPoses(gt);
+    gt = io::readAslGroundTruth(trajectory_path);
+    poses = io::toStampedPoses(gt);
   } else {
-    poses = eval::readTum(trajectory_path);
+    poses = io::readTum(trajectory_path);
   }
   if (poses.size() < 4 || poses.back().t - poses.front().t < 1.0) {
     throw std::runtime_error(trajectory_path + ": too short for a trajectory (needs 4 poses over 1 s)");
@@ -62,7 +62,7 @@ Scenario recordedImuScenario(const std::string& trajectory_path, const std::stri
   auto traj = std::make_shared<BsplineTrajectory>(poses, 0.05);
   sc.trajectory = traj;
 
-  const std::vector<ImuData> all = eval::readAslImu(imu_csv);
+  const std::vector<ImuData> all = io::readAslImu(imu_csv);
   auto seq = std::make_shared<ImuSequence>();
   const double nan = std::numeric_limits<double>::quiet_NaN();
   for (const ImuData& d : all) {
@@ -84,10 +84,10 @@ Scenario recordedImuScenario(const std::string& trajectory_path, const std::stri
 
   const fs::path imu_dir = fs::path(imu_csv).parent_path();
   const fs::path imu_yaml = imu_dir / "sensor.yaml";
-  sc.imu.noise = fs::exists(imu_yaml) ? eval::readAslImuNoise(imu_yaml.string()) : paperImuNoise();
+  sc.imu.noise = fs::exists(imu_yaml) ? io::readAslImuNoise(imu_yaml.string()) : paperImuNoise();
   const fs::path cam_yaml = imu_dir.parent_path() / "cam0" / "sensor.yaml";
   if (fs::exists(cam_yaml)) {
-    const eval::AslCamera cam = eval::readAslCamera(cam_yaml.string());
+    const io::AslCamera cam = io::readAslCamera(cam_yaml.string());
     sc.camera = CameraModel(cam.intrinsics);
     sc.T_b_c = cam.T_b_c;
     if (cam.rate_hz > 0.0) sc.cam.rate_hz = cam.rate_hz;

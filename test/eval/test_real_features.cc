@@ -24,12 +24,12 @@ TEST(RealFeatures, BestConfigurationFollowsTheEurocGroundTruth) {
   const std::string csv = std::string(dir) + "/euroc_v1_01_features/eqvio_processed_30s.csv";
   const std::string gt = std::string(dir) + "/euroc_v1_01_micro/mav0/state_groundtruth_estimate0/data.csv";
   if (!std::ifstream(csv) || !std::ifstream(gt)) GTEST_SKIP() << "real data not found in " << dir;
-  const eval::FeatureTrackData data = eval::readEqvioCsv(csv);
+  const io::FeatureTrackData data = io::readEqvioCsv(csv);
   ASSERT_EQ(data.frames.size(), 601u);
   // Defaults (sensor_centric_composition, every update, inverse depth) with the EuRoC settings of
   // vi_ekf_slam_run_features.
   const EkfSlamConfig c = eval::eurocFeatureReplayConfig();
-  const auto r = eval::replayFeatures(data, eval::toStampedPoses(eval::readAslGroundTruth(gt)), c, StaticInitParams());
+  const auto r = eval::replayFeatures(data, io::toStampedPoses(io::readAslGroundTruth(gt)), c, StaticInitParams());
   EXPECT_GT(r.frames_processed, 500);
   EXPECT_GT(r.rejected_observations, 0);  // the take-off mismatches must be gated out
   EXPECT_GT(r.metrics.distance_m, 7.0);
@@ -41,10 +41,10 @@ TEST(RealFeatures, BestConfigurationFollowsTheEurocGroundTruth) {
 TEST(Datasets, ReadersRejectMalformedFiles) {
   const std::string path = vi_ekf_slam::test::programScratch() / "bad_imu.csv";
   std::ofstream(path) << "#timestamp,wx,wy,wz,ax,ay,az\n1,0,0,0,0,0\n";
-  EXPECT_THROW(eval::readAslImu(path), std::runtime_error);
+  EXPECT_THROW(io::readAslImu(path), std::runtime_error);
   std::ofstream(path) << "1,0,0,x,0,0,9.8\n";
-  EXPECT_THROW(eval::readAslImu(path), std::runtime_error);
-  EXPECT_THROW(eval::readAslCamera("/nonexistent/sensor.yaml"), std::runtime_error);
+  EXPECT_THROW(io::readAslImu(path), std::runtime_error);
+  EXPECT_THROW(io::readAslCamera("/nonexistent/sensor.yaml"), std::runtime_error);
 }
 
 TEST(Datasets, EurocCameraAndImuNoise) {
@@ -52,12 +52,12 @@ TEST(Datasets, EurocCameraAndImuNoise) {
   if (!dir) GTEST_SKIP() << "DATA_DIR not set";
   const std::string base = std::string(dir) + "/euroc_v1_01_micro/mav0/";
   if (!std::ifstream(base + "cam0/sensor.yaml")) GTEST_SKIP();
-  const eval::AslCamera cam = eval::readAslCamera(base + "cam0/sensor.yaml");
+  const io::AslCamera cam = io::readAslCamera(base + "cam0/sensor.yaml");
   EXPECT_EQ(cam.intrinsics.width, 752);
   EXPECT_NEAR(cam.intrinsics.fx, 458.654, 1e-9);
   EXPECT_NEAR(cam.T_b_c.p_b_c.x(), -0.0216401454975, 1e-12);
   EXPECT_NEAR(cam.T_b_c.R_b_c(1, 0), 0.999557249008, 1e-4);
-  const ImuNoiseParams n = eval::readAslImuNoise(base + "imu0/sensor.yaml");
+  const ImuNoiseParams n = io::readAslImuNoise(base + "imu0/sensor.yaml");
   EXPECT_NEAR(n.gyro_noise_density, 1.6968e-4, 1e-12);
-  EXPECT_EQ(eval::readAslImages(base + "cam0").size(), 95u);
+  EXPECT_EQ(io::readAslImages(base + "cam0").size(), 95u);
 }

@@ -9,18 +9,18 @@
 #include <fstream>
 #include <random>
 
-#include "vi_ekf_slam/eval/datasets.h"
+#include "vi_ekf_slam/io/datasets.h"
 #include "vi_ekf_slam/eval/reference_comparison.h"
 
 using namespace vi_ekf_slam;
 
 namespace {
 
-std::vector<eval::StampedPose> walk(int n) {
-  std::vector<eval::StampedPose> out;
+std::vector<io::StampedPose> walk(int n) {
+  std::vector<io::StampedPose> out;
   for (int i = 0; i < n; ++i) {
     const double t = 0.05 * i;
-    eval::StampedPose p;
+    io::StampedPose p;
     p.t = 100.0 + t;
     p.p = Vec3(2.0 * std::sin(0.4 * t), 1.5 * std::cos(0.3 * t), 0.2 * std::sin(1.1 * t));
     p.q = Quat(Eigen::AngleAxisd(0.3 * t, Vec3::UnitZ()) * Eigen::AngleAxisd(0.1 * std::sin(t), Vec3::UnitX()));
@@ -30,9 +30,9 @@ std::vector<eval::StampedPose> walk(int n) {
 }
 
 /// `est` seen in another frame: p' = s R p + t, q' = R q.
-std::vector<eval::StampedPose> transformed(const std::vector<eval::StampedPose>& est, double s, const Quat& R,
-                                           const Vec3& t) {
-  std::vector<eval::StampedPose> out = est;
+std::vector<io::StampedPose> transformed(const std::vector<io::StampedPose>& est, double s, const Quat& R,
+                                         const Vec3& t) {
+  std::vector<io::StampedPose> out = est;
   for (auto& p : out) {
     p.p = s * (R * p.p) + t;
     p.q = R * p.q;
@@ -86,12 +86,12 @@ TEST(ReferenceComparison, EurocGroundTruthCsvIsReadAsAReference) {
     f << "1403715273262142976,0.878895,2.1834,0.948427,0.069433,-0.824237,-0.106942,-0.551702,0,0,0,0,0,0,0,0,0\n";
     f << "1403715273312143104,0.878973,2.18348,0.948329,0.0694375,-0.824253,-0.106951,-0.551676,0,0,0,0,0,0,0,0,0\n";
   }
-  const auto poses = eval::readTrajectoryFile(path);
+  const auto poses = io::readTrajectoryFile(path);
   ASSERT_EQ(poses.size(), 2u);
   EXPECT_NEAR(poses[0].t, 1403715273.262143, 1e-6);
   EXPECT_NEAR(poses[1].p.y(), 2.18348, 1e-12);
   EXPECT_NEAR(poses[0].q.w(), 0.069433, 1e-3);
   // A comma-separated TUM file stays a TUM file.
   std::ofstream(path) << "10.0,1,2,3,0,0,0,1\n10.1,1,2,3,0,0,0,1\n";
-  EXPECT_EQ(eval::readTrajectoryFile(path).size(), 2u);
+  EXPECT_EQ(io::readTrajectoryFile(path).size(), 2u);
 }

@@ -13,7 +13,7 @@
 #include <string>
 
 #include "../evo_tum_rules.h"
-#include "vi_ekf_slam/eval/tum_io.h"
+#include "vi_ekf_slam/io/tum_io.h"
 
 using namespace vi_ekf_slam;
 
@@ -27,7 +27,7 @@ std::string writeFile(const std::string& name, const std::string& text) {
 
 std::string errorOf(const std::string& path) {
   try {
-    eval::readTum(path);
+    io::readTum(path);
   } catch (const std::runtime_error& e) {
     return e.what();
   }
@@ -42,13 +42,13 @@ TEST(TumIo, CommasAndARepeatedLineReadAsTheSpaceSeparatedFile) {
       "10.0 1 2 3 0 0 0 1\n"
       "10.1 1.1 2 3 0 0 0.0499792 0.9987503\n"
       "10.2 1.2 2 3 0 0 0.0998334 0.9950042\n";
-  const auto a = eval::readTum(writeFile("plain", plain));
+  const auto a = io::readTum(writeFile("plain", plain));
   ASSERT_EQ(a.size(), 3u);
-  const auto b = eval::readTum(writeFile("comma",
-                                         "10.0,1,2,3,0,0,0,1\n"
-                                         "10.1,1.1,2,3,0,0,0.0499792,0.9987503\n"
-                                         "10.1,1.1,2,3,0,0,0.0499792,0.9987503\n"  // written twice
-                                         "10.2, 1.2, 2, 3, 0, 0, 0.0998334, 0.9950042\n"));
+  const auto b = io::readTum(writeFile("comma",
+                                       "10.0,1,2,3,0,0,0,1\n"
+                                       "10.1,1.1,2,3,0,0,0.0499792,0.9987503\n"
+                                       "10.1,1.1,2,3,0,0,0.0499792,0.9987503\n"  // written twice
+                                       "10.2, 1.2, 2, 3, 0, 0, 0.0998334, 0.9950042\n"));
   ASSERT_EQ(b.size(), a.size());
   for (size_t i = 0; i < a.size(); ++i) {
     EXPECT_EQ(a[i].t, b[i].t);
@@ -77,10 +77,10 @@ TEST(TumIo, ContradictionsAreRefusedWithTheirLine) {
 
 namespace {
 
-std::vector<eval::StampedPose> someTrajectoryWithCovariances() {
-  std::vector<eval::StampedPose> poses;
+std::vector<io::StampedPose> someTrajectoryWithCovariances() {
+  std::vector<io::StampedPose> poses;
   for (int i = 0; i < 5; ++i) {
-    eval::StampedPose p;
+    io::StampedPose p;
     p.t = 1650458716.848713 + 0.05 * i;
     p.p = Vec3(0.1 * i, -0.2 * i, 1e-7 * i);
     p.q = Quat(Eigen::AngleAxisd(0.3 * i, Vec3(1, 2, 3).normalized()));
@@ -96,15 +96,15 @@ std::vector<eval::StampedPose> someTrajectoryWithCovariances() {
 // The trajectories we write are read by evo (and ov_eval, rpg_trajectory_evaluation): 8 columns;
 // the covariances travel in their own file and come back as written.
 TEST(TumIo, WrittenTrajectoriesPassEvosRulesAndTheCovariancesComeBack) {
-  const std::vector<eval::StampedPose> poses = someTrajectoryWithCovariances();
+  const std::vector<io::StampedPose> poses = someTrajectoryWithCovariances();
   const std::string tum = vi_ekf_slam::test::programScratch() / "tum_io_written.tum";
   const std::string cov = vi_ekf_slam::test::programScratch() / "tum_io_written_covariance.txt";
-  eval::writeTum(tum, poses, "t x y z qx qy qz qw (a header)");
-  eval::writePoseCovariances(cov, poses);
+  io::writeTum(tum, poses, "t x y z qx qy qz qw (a header)");
+  io::writePoseCovariances(cov, poses);
   EXPECT_EQ(test::evoStrictTumProblem(tum), "");
-  std::vector<eval::StampedPose> back = eval::readTum(tum);
+  std::vector<io::StampedPose> back = io::readTum(tum);
   ASSERT_EQ(back.size(), poses.size());
-  EXPECT_EQ(eval::readPoseCovariances(cov, &back), static_cast<int>(poses.size()));
+  EXPECT_EQ(io::readPoseCovariances(cov, &back), static_cast<int>(poses.size()));
   for (size_t i = 0; i < poses.size(); ++i) {
     EXPECT_NEAR(back[i].t, poses[i].t, 1e-9);
     EXPECT_LT((back[i].p - poses[i].p).norm(), 1e-8);

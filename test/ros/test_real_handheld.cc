@@ -12,7 +12,7 @@
 #include <fstream>
 #include <optional>
 
-#include "vi_ekf_slam/eval/datasets.h"
+#include "vi_ekf_slam/io/datasets.h"
 #include "vi_ekf_slam/eval/reference_comparison.h"
 #include "vi_ekf_slam/ros/conversions.h"
 #include "vi_ekf_slam/ros/ekf_slam_processor.h"
@@ -22,14 +22,14 @@ namespace {
 
 class KeepingSink : public OutputSink {
  public:
-  std::vector<eval::StampedPose> poses;
+  std::vector<io::StampedPose> poses;
   std::vector<double> time_offsets;
   std::vector<std::string> events;
   double max_speed_mps = 0.0;
   double angular_rate_var = 0.0;  ///< the last odometry's twist covariance of omega_x [rad^2/s^2]
   void odometry(const nav_msgs::Odometry& o) override {
     angular_rate_var = o.twist.covariance[21];
-    eval::StampedPose p;
+    io::StampedPose p;
     p.t = o.header.stamp.toSec();
     tf2::fromMsg(o.pose.pose.position, p.p);
     tf2::fromMsg(o.pose.pose.orientation, p.q);
@@ -79,10 +79,10 @@ std::optional<RunResult> runSegment(double start_s, double seconds, const std::s
   const std::string base = std::string(dir) + "/dmvio_handheld/";
   if (!std::ifstream(base + "mav0/cam0/sensor.yaml")) return std::nullopt;
   ros::Time::init();  // no master: wall time for the (throttled) log messages only
-  const eval::AslCamera cam = eval::readAslCamera(base + "mav0/cam0/sensor.yaml");
-  const std::vector<eval::AslImage> images = eval::readAslImages(base + "mav0/cam0");
-  const std::vector<ImuData> imu = eval::readAslImu(base + "mav0/imu0/data.csv");
-  const std::vector<eval::StampedPose> sfm = eval::readTum(base + "reference/sfm_camera_poses.txt");
+  const io::AslCamera cam = io::readAslCamera(base + "mav0/cam0/sensor.yaml");
+  const std::vector<io::AslImage> images = io::readAslImages(base + "mav0/cam0");
+  const std::vector<ImuData> imu = io::readAslImu(base + "mav0/imu0/data.csv");
+  const std::vector<io::StampedPose> sfm = io::readTum(base + "reference/sfm_camera_poses.txt");
 
   YamlParams yaml(std::string(VI_EKF_SLAM_SOURCE_DIR) + "/config/vi_ekf_slam.yaml");
   if (!rig_file.empty()) yaml.overlay(YamlParams(std::string(VI_EKF_SLAM_SOURCE_DIR) + "/" + rig_file));
@@ -202,9 +202,8 @@ TEST(RealHandheld, TheKalibrFilesGiveTheRigFilesTrajectory) {
 TEST(RealHandheld, StartedMidWalkInitializesWhileMoving) {
   const auto whole = runSegment(0.0, 46.0, "");
   if (!whole) GTEST_SKIP() << "no dmvio_handheld in DATA_DIR";
-  const auto cam = eval::readAslCamera(std::string(std::getenv("DATA_DIR")) + "/dmvio_handheld/mav0/cam0/sensor.yaml");
-  const auto sfm =
-      eval::readTum(std::string(std::getenv("DATA_DIR")) + "/dmvio_handheld/reference/sfm_camera_poses.txt");
+  const auto cam = io::readAslCamera(std::string(std::getenv("DATA_DIR")) + "/dmvio_handheld/mav0/cam0/sensor.yaml");
+  const auto sfm = io::readTum(std::string(std::getenv("DATA_DIR")) + "/dmvio_handheld/reference/sfm_camera_poses.txt");
   const auto whole_view = eval::referenceView(whole->sink.poses, cam.T_b_c, &whole->sink.time_offsets);
   double log_ratio_sum = 0.0;
   int cuts = 0;
@@ -219,7 +218,7 @@ TEST(RealHandheld, StartedMidWalkInitializesWhileMoving) {
                 r->sink.events.front().c_str());
     EXPECT_LT(first_odom_after_s, 2.0);
     expectTracked(*r, "cut");
-    std::vector<eval::StampedPose> same_seconds;
+    std::vector<io::StampedPose> same_seconds;
     for (const auto& p : whole_view)
       if (p.t >= r->sfm.t.front() && p.t <= r->sfm.t.back()) same_seconds.push_back(p);
     const auto from_start = eval::compareWithReference(same_seconds, sfm, eval::Alignment::kSim3);

@@ -13,7 +13,7 @@
 #include <fstream>
 
 #include "synthetic_rig.h"
-#include "vi_ekf_slam/eval/datasets.h"
+#include "vi_ekf_slam/io/datasets.h"
 #include "vi_ekf_slam/ros/bag_replay.h"
 #include "vi_ekf_slam/ros/calibration_source.h"
 #include "vi_ekf_slam/ros/conversions.h"
@@ -61,7 +61,7 @@ TEST(KalibrImport, TheRecordingsKalibrFilesGiveItsRigFile) {
   EXPECT_EQ(from_kalibr.filter.imu_noise.gyro_random_walk, from_rig.filter.imu_noise.gyro_random_walk);
   EXPECT_EQ(from_kalibr.filter.camera_time_offset_s, from_rig.filter.camera_time_offset_s);
   // The intrinsics are those the recording's camera_info carries.
-  const eval::AslCamera cam = eval::readAslCamera(dir + "mav0/cam0/sensor.yaml");
+  const io::AslCamera cam = io::readAslCamera(dir + "mav0/cam0/sensor.yaml");
   std::optional<CameraIntrinsics> k;
   ASSERT_EQ(intrinsicsFromOptions(from_kalibr.node, &k), "");
   ASSERT_TRUE(k);

@@ -5,7 +5,7 @@
 
 #include "../evo_tum_rules.h"
 #include "../scratch_dir.h"
-#include "vi_ekf_slam/eval/tum_io.h"
+#include "vi_ekf_slam/io/tum_io.h"
 #include <rosbag/bag.h>
 #include <rosbag/view.h>
 #include <sensor_msgs/CompressedImage.h>
@@ -192,8 +192,8 @@ TEST(ToolsCli, RunBagPicksTopicsAndReadsCompressedImages) {
   EXPECT_FALSE(std::ifstream(dir + "/unfit/world_centric.tum").good()) << "an empty trajectory written";
   // The trajectory is a TUM file evo reads, its covariances beside it, one per pose.
   EXPECT_EQ(vi_ekf_slam::test::evoStrictTumProblem(dir + "/out/world_centric.tum"), "");
-  std::vector<vi_ekf_slam::eval::StampedPose> written = vi_ekf_slam::eval::readTum(dir + "/out/world_centric.tum");
-  EXPECT_EQ(vi_ekf_slam::eval::readPoseCovariances(dir + "/out/world_centric_covariance.txt", &written),
+  std::vector<vi_ekf_slam::io::StampedPose> written = vi_ekf_slam::io::readTum(dir + "/out/world_centric.tum");
+  EXPECT_EQ(vi_ekf_slam::io::readPoseCovariances(dir + "/out/world_centric_covariance.txt", &written),
             static_cast<int>(written.size()));
   // EuRoC's ground-truth CSV is a reference too: the run's own trajectory written that way.
   {

@@ -7,7 +7,7 @@
 #include <string>
 
 #include "scratch_dir.h"
-#include "vi_ekf_slam/eval/tum_io.h"
+#include "vi_ekf_slam/io/tum_io.h"
 #include "vi_ekf_slam/sim/generated_walks.h"
 #include "vi_ekf_slam/sim/scenarios.h"
 
@@ -16,7 +16,7 @@ namespace vi_ekf_slam::sim {
 /// 14 to 52 s of there_and_back, with `texture_patterns` repeated appearances (0: each unique).
 inline Scenario corridorReturn(int texture_patterns) {
   const std::string path = test::programScratch() / "there_and_back.txt";
-  eval::writeTum(path, generatedWalk("there_and_back"));
+  io::writeTum(path, generatedWalk("there_and_back"));
   Scenario sc = tumScenario(path, 15.0, 1);
   sc.trajectory = std::make_shared<TruncatedTrajectory>(sc.trajectory, sc.trajectory->startTime() + 14.0,
                                                         sc.trajectory->startTime() + 52.0);

@@ -1,4 +1,4 @@
-// The dynamic initializer's stages one by one (core/alignment/): track selection, preintegration,
+// The dynamic initializer's stages one by one (core/dynamic_init/): track selection, preintegration,
 // the linear alignment, the refinement, the time-offset search and the uncertainty, each on a
 // simulated window whose truth is known. The initializer as a whole: test_dynamic_init.cc.
 #include <gtest/gtest.h>
@@ -7,11 +7,11 @@
 #include <deque>
 #include <random>
 
-#include "vi_ekf_slam/core/alignment/alignment_problem.h"
-#include "vi_ekf_slam/core/alignment/alignment_uncertainty.h"
-#include "vi_ekf_slam/core/alignment/preintegration.h"
-#include "vi_ekf_slam/core/alignment/time_offset_search.h"
-#include "vi_ekf_slam/core/alignment/track_selection.h"
+#include "vi_ekf_slam/core/dynamic_init/alignment_problem.h"
+#include "vi_ekf_slam/core/dynamic_init/alignment_uncertainty.h"
+#include "vi_ekf_slam/core/dynamic_init/preintegration.h"
+#include "vi_ekf_slam/core/dynamic_init/time_offset_search.h"
+#include "vi_ekf_slam/core/dynamic_init/track_selection.h"
 #include "vi_ekf_slam/core/imu_propagation.h"
 #include "vi_ekf_slam/sim/camera_simulator.h"
 #include "vi_ekf_slam/sim/scenarios.h"

@@ -14,7 +14,7 @@ namespace vi_ekf_slam::sim {
 namespace {
 
 /// Mean horizontal speed over [t0, t1) [m/s] (the centreline's, up to the gait's sway).
-double meanSpeed(const std::vector<eval::StampedPose>& w, double t0, double t1) {
+double meanSpeed(const std::vector<io::StampedPose>& w, double t0, double t1) {
   double d = 0.0, t_first = -1.0, t_last = 0.0;
   for (size_t i = 1; i < w.size(); ++i) {
     if (w[i - 1].t < t0 || w[i].t >= t1) continue;
@@ -25,13 +25,13 @@ double meanSpeed(const std::vector<eval::StampedPose>& w, double t0, double t1) 
   return d / (t_last - t_first);
 }
 
-double heightAt(const std::vector<eval::StampedPose>& w, double t) {
+double heightAt(const std::vector<io::StampedPose>& w, double t) {
   return w[static_cast<size_t>(std::lround(t * 100.0))].p.z();
 }
 
 TEST(GeneratedWalks, EveryKindIsAContinuousTrajectoryAt100Hz) {
   for (const std::string& kind : generatedWalkKinds(false)) {
-    const std::vector<eval::StampedPose> w = generatedWalk(kind);
+    const std::vector<io::StampedPose> w = generatedWalk(kind);
     ASSERT_GE(w.size(), 6000u) << kind;
     for (size_t i = 1; i < w.size(); ++i) {
       ASSERT_NEAR(w[i].t - w[i - 1].t, 0.01, 1e-9) << kind;
@@ -70,7 +70,7 @@ TEST(Gait, TheCadenceFollowsTheSpeedAndStandingLeavesOnlyThePosturalSway) {
   EXPECT_NEAR(g.phase() / (2.0 * M_PI), 1.9 * std::sqrt(0.5 / 1.3), 1e-9);  // steps in that second
   // Standing: the rig within the postural sway of its centreline point, upright.
   for (double t = 0.0; t < 10.0; t += 0.1) {
-    const eval::StampedPose s = g.pose(t, Vec3(1.0, 2.0, 1.3), 0.3, 0.0);
+    const io::StampedPose s = g.pose(t, Vec3(1.0, 2.0, 1.3), 0.3, 0.0);
     EXPECT_LE((s.p - Vec3(1.0, 2.0, 1.3)).norm(), 0.004 + 1e-12);
     EXPECT_LT(s.q.angularDistance(Quat(Eigen::AngleAxisd(0.3, Vec3::UnitZ()))), 1e-12);
   }
@@ -79,7 +79,7 @@ TEST(Gait, TheCadenceFollowsTheSpeedAndStandingLeavesOnlyThePosturalSway) {
   double max_up = 0.0, max_side = 0.0;
   for (int i = 0; i < 400; ++i) {
     walk.advance(1.3, 0.01);
-    const eval::StampedPose s = walk.pose(0.01 * i, Vec3::Zero(), 0.0, 1.3);
+    const io::StampedPose s = walk.pose(0.01 * i, Vec3::Zero(), 0.0, 1.3);
     max_up = std::max(max_up, std::abs(s.p.z()));
     max_side = std::max(max_side, std::abs(s.p.y()));
   }
@@ -99,7 +99,7 @@ namespace {
 TEST(GeneratedWalks, TheReturningWalksComeBackToWhereTheyWere) {
   for (const char* kind : {"there_and_back", "laps"}) {
     SCOPED_TRACE(kind);
-    const std::vector<eval::StampedPose> w = generatedWalk(kind);
+    const std::vector<io::StampedPose> w = generatedWalk(kind);
     std::vector<double> t;
     std::vector<Vec3> p;
     for (size_t i = 0; i < w.size(); i += 10) {  // 10 Hz

@@ -2,7 +2,7 @@
 
 #include "vi_ekf_slam/core/chi_squared.h"
 #include "vi_ekf_slam/sim/loop_walk.h"
-#include "vi_ekf_slam/sim/monte_carlo.h"
+#include "vi_ekf_slam/eval/monte_carlo.h"
 
 using namespace vi_ekf_slam;
 

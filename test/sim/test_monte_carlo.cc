@@ -6,7 +6,7 @@
 #include "test_helpers.h"
 #include "vi_ekf_slam/sim/camera_simulator.h"
 #include "vi_ekf_slam/sim/imu_simulator.h"
-#include "vi_ekf_slam/sim/monte_carlo.h"
+#include "vi_ekf_slam/eval/monte_carlo.h"
 #include "vi_ekf_slam/sim/scenarios.h"
 
 using namespace vi_ekf_slam;
@@ -22,7 +22,7 @@ EkfSlamConfig simConfig(const sim::Scenario& sc, bool zero_velocity = true) {
   return c;
 }
 
-sim::ConsistencySummary shortStudy(Mechanization m, LandmarkInitMethod init, CompositionTrigger trig, int runs) {
+eval::ConsistencySummary shortStudy(Mechanization m, LandmarkInitMethod init, CompositionTrigger trig, int runs) {
   sim::HallwayParams hp;
   hp.duration_s = 12.0;
   hp.turn_time_s = 8.0;  // the turn happens inside the short walk
@@ -31,20 +31,20 @@ sim::ConsistencySummary shortStudy(Mechanization m, LandmarkInitMethod init, Com
   c.mechanization = m;
   c.landmark_init = init;
   c.composition_trigger = trig;
-  std::vector<sim::RunResult> results;
-  for (int r = 0; r < runs; ++r) results.push_back(sim::runMonteCarloRun(sc, c, 500 + r));
-  return sim::summarize(toString(m), results);
+  std::vector<eval::RunResult> results;
+  for (int r = 0; r < runs; ++r) results.push_back(eval::runMonteCarloRun(sc, c, 500 + r));
+  return eval::summarize(toString(m), results);
 }
 
 /// Runs r = 0..runs-1 of sc, each started 2, 4.5, 7 or 9.5 s into the walk and window_s long.
-std::vector<sim::RunResult> startsAlongTheWalk(const sim::Scenario& sc, const EkfSlamConfig& c, int runs,
-                                               double window_s) {
-  std::vector<sim::RunResult> out;
+std::vector<eval::RunResult> startsAlongTheWalk(const sim::Scenario& sc, const EkfSlamConfig& c, int runs,
+                                                double window_s) {
+  std::vector<eval::RunResult> out;
   for (int r = 0; r < runs; ++r) {
     sim::Scenario s = sc;
     const double start = sc.trajectory->startTime() + 2.0 + 2.5 * (r % 4);
     s.trajectory = std::make_shared<sim::TruncatedTrajectory>(sc.trajectory, start, start + window_s);
-    out.push_back(sim::runMonteCarloRun(s, c, 900 + r));
+    out.push_back(eval::runMonteCarloRun(s, c, 900 + r));
   }
   return out;
 }
@@ -62,7 +62,7 @@ TEST(MonteCarlo, InitialErrorsAreDrawnFromThePrior) {
   double sum = 0.0;
   const int n = 4000;
   for (int i = 0; i < n; ++i) {
-    const NavState est = sim::drawInitialEstimate(truth, u, rng);
+    const NavState est = eval::drawInitialEstimate(truth, u, rng);
     Eigen::Matrix<double, 6, 1> e;
     e << truth.p_n_b - est.p_n_b, eval::orientationError(truth.q_n_b, est.q_n_b);
     sum += eval::nees(e, P);
@@ -112,7 +112,7 @@ StandingStartResult standingStart(bool zero_velocity, int runs) {
   int standing_frames = 0, frames = 0;
   double v_nees = 0.0;
   for (int r = 0; r < runs; ++r) {
-    const sim::RunResult run = sim::runMonteCarloRun(sc, c, 700 + r);
+    const eval::RunResult run = eval::runMonteCarloRun(sc, c, 700 + r);
     for (const auto& f : run.frames) {
       out.pose_nees += f.nees_pose;
       ++frames;
@@ -189,7 +189,7 @@ TEST(MonteCarlo, HandHeldStartOfTheTumCorridorStaysConsistent) {
     Stats s;
     int n = 0, standing = 0;
     for (int r = 0; r < 10; ++r) {
-      const sim::RunResult run = sim::runMonteCarloRun(sc, c, 1000003ULL + r);
+      const eval::RunResult run = eval::runMonteCarloRun(sc, c, 1000003ULL + r);
       for (const auto& f : run.frames) {
         if (f.t - t0 > 1.0 && f.t - t0 < 5.5) {  // standing, after the parallax window
           s.detected += f.stationary;
@@ -239,7 +239,7 @@ TEST(MonteCarlo, AStartAtRestGetsItsLandmarksAtOnce) {
   const sim::Scenario sc = sim::hallwayScenario(hp, 1.0, 9);
   const EkfSlamConfig c = simConfig(sc);
   ASSERT_TRUE(c.zero_velocity.defer_landmarks);
-  const sim::RunResult run = sim::runMonteCarloRun(sc, c, 77);
+  const eval::RunResult run = eval::runMonteCarloRun(sc, c, 77);
   ASSERT_FALSE(run.frames.empty());
   EXPECT_GT(run.frames.front().new_landmarks, 20);
 
@@ -271,7 +271,7 @@ TEST(MonteCarlo, ADynamicStartMidWalkIsQuickAndConsistent) {
   sim::Scenario sc = sim::hallwayScenario(sim::HallwayParams(), 1.0, 9);
   sc.dynamic_init = DynamicInitParams();
   const int kRuns = 12;
-  const sim::ConsistencySummary sum = sim::summarize("dynamic", startsAlongTheWalk(sc, simConfig(sc), kRuns, 12.0));
+  const eval::ConsistencySummary sum = eval::summarize("dynamic", startsAlongTheWalk(sc, simConfig(sc), kRuns, 12.0));
   for (double d : sum.init_delay_s) EXPECT_LE(d, 1.5);
   ASSERT_EQ(sum.runs, kRuns);
   std::printf("dynamic start: NEES pose first 10 s %.2f (band [%.2f, %.2f]), posyaw ATE %.3f m\n", sum.nees_pose_early,
@@ -293,7 +293,7 @@ TEST(MonteCarlo, ADynamicStartLosesToTheTruthOnlyTheImuBiasItCannotSeparateFromT
     if (dynamic) s.dynamic_init = DynamicInitParams();
     s.start_at_truth = !dynamic;
     s.draw_imu_biases = biases;
-    return sim::summarize("start", startsAlongTheWalk(s, c, 12, 20.0)).ate_posyaw_m;
+    return eval::summarize("start", startsAlongTheWalk(s, c, 12, 20.0)).ate_posyaw_m;
   };
   const double truth = posyaw(false, true), drawn = posyaw(true, true), none = posyaw(true, false);
   std::printf("posyaw ATE: from the truth %.4f m, dynamic start %.4f m (%.2fx), without IMU biases %.4f m (%.2fx)\n",

@@ -5,9 +5,9 @@
 
 #include "test_helpers.h"
 #include "vi_ekf_slam/core/ekf_slam.h"
-#include "vi_ekf_slam/eval/datasets.h"
+#include "vi_ekf_slam/io/datasets.h"
 #include "vi_ekf_slam/eval/metrics.h"
-#include "vi_ekf_slam/sim/monte_carlo.h"
+#include "vi_ekf_slam/eval/monte_carlo.h"
 #include "vi_ekf_slam/sim/recorded_imu.h"
 
 using namespace vi_ekf_slam;
@@ -96,10 +96,10 @@ TEST(RecordedImu, FilterFollowsTheFlightWithTheRealImu) {
   sim::Scenario sc = sim::recordedImuScenario(f.gt, f.imu, 15.0, 1);
   sc.trajectory = std::make_shared<sim::TruncatedTrajectory>(sc.trajectory, sc.trajectory->startTime() + 30.0);
   EkfSlamConfig c;
-  c.imu_noise = eval::eurocMavImuNoise();
+  c.imu_noise = io::eurocMavImuNoise();
   c.landmark_timeout_s = 1.0;
   c.max_landmarks = 300;
-  const sim::RunResult r = sim::runMonteCarloRun(sc, c, 7);
+  const eval::RunResult r = eval::runMonteCarloRun(sc, c, 7);
   ASSERT_GT(r.frames.size(), 590u);
   for (const auto& m : r.frames) ASSERT_TRUE(m.p_est.allFinite());
   std::printf("30 s of V1_01 with the real IMU: ATE %.3f m, final %.3f m over %.1f m\n", r.ate_position_m,

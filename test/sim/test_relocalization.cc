@@ -14,10 +14,11 @@
 #include <random>
 
 #include "corridor_return.h"
-#include "vi_ekf_slam/sim/monte_carlo.h"
+#include "vi_ekf_slam/eval/monte_carlo.h"
 #include "vi_ekf_slam/sim/sim_runner.h"
 
 namespace vi_ekf_slam::sim {
+using namespace eval;  // the Monte-Carlo runs (eval/monte_carlo.h)
 namespace {
 
 constexpr int kRuns = 3;

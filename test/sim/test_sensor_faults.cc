@@ -3,7 +3,7 @@
 #include <map>
 
 #include "vi_ekf_slam/sim/hallway.h"
-#include "vi_ekf_slam/sim/monte_carlo.h"
+#include "vi_ekf_slam/eval/monte_carlo.h"
 #include "vi_ekf_slam/sim/scenarios.h"
 #include "vi_ekf_slam/sim/sim_runner.h"
 
@@ -142,9 +142,9 @@ TEST(SensorFaults, TheFilterIsConsistentRightAfterEachOutage) {
                {K::kCameraCovered, 24.0, 3.0}};
   EkfSlamConfig c;  // the node's defaults
   c.imu_noise = sc.imu.noise;
-  std::vector<sim::RunResult> runs;
-  for (int r = 0; r < 12; ++r) runs.push_back(sim::runMonteCarloRun(sc, c, 1000 + r));
-  const sim::ConsistencySummary sum = sim::summarize("faults", runs);
+  std::vector<eval::RunResult> runs;
+  for (int r = 0; r < 12; ++r) runs.push_back(eval::runMonteCarloRun(sc, c, 1000 + r));
+  const eval::ConsistencySummary sum = eval::summarize("faults", runs);
   std::map<long, std::pair<double, int>> by_time;  // frame time [ms] -> (sum of NEES, runs)
   for (const auto& run : runs) {
     for (const auto& f : run.frames) {

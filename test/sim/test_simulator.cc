@@ -203,7 +203,7 @@ TEST(BsplineTrajectory, ReproducesTheInputPosesAndIsConsistent) {
   // Poses of an analytic motion at 20 Hz -> spline; compare at the input times.
   const sim::LissajousTrajectory ref(Vec3(1, 2, 0), Vec3(0.8, 0.5, 0.1), Vec3(0.4, 0.3, 1.0), Vec3(0.2, 0.1, 0.6),
                                      Vec3(0.5, 0.7, 0.3), 30.0);
-  std::vector<eval::StampedPose> poses;
+  std::vector<io::StampedPose> poses;
   for (double t = 0.0; t <= 30.0; t += 0.05) {
     const auto s = ref.sample(t);
     poses.push_back({t, s.p_n_b, s.q_n_b, std::nullopt});

@@ -11,7 +11,7 @@
 #include <vector>
 
 #include "vi_ekf_slam/core/camera_model.h"
-#include "vi_ekf_slam/core/dynamic_initializer.h"
+#include "vi_ekf_slam/core/dynamic_init/dynamic_initializer.h"
 #include "vi_ekf_slam/core/ekf_slam_config.h"
 #include "vi_ekf_slam/core/frame_result.h"
 #include "vi_ekf_slam/core/imu_buffer.h"

@@ -8,7 +8,7 @@
 #include <optional>
 
 #include "vi_ekf_slam/core/camera_model.h"
-#include "vi_ekf_slam/core/dynamic_initializer.h"
+#include "vi_ekf_slam/core/dynamic_init/dynamic_initializer.h"
 #include "vi_ekf_slam/core/ekf_slam_config.h"
 #include "vi_ekf_slam/core/filter_state.h"
 #include "vi_ekf_slam/core/navigation_output.h"

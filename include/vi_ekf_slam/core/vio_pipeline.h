@@ -12,7 +12,7 @@
 #include <optional>
 #include <string>
 
-#include "vi_ekf_slam/core/dynamic_initializer.h"
+#include "vi_ekf_slam/core/dynamic_init/dynamic_initializer.h"
 #include "vi_ekf_slam/core/ekf_slam.h"
 #include "vi_ekf_slam/core/imu_sample_check.h"
 #include "vi_ekf_slam/core/map_reuse/kept_map.h"

@@ -6,7 +6,7 @@
 #include "vi_ekf_slam/core/ekf_slam_config.h"
 #include "vi_ekf_slam/core/navigation_output.h"
 #include "vi_ekf_slam/core/static_initializer.h"
-#include "vi_ekf_slam/eval/datasets.h"
+#include "vi_ekf_slam/io/datasets.h"
 #include "vi_ekf_slam/eval/run_evaluation.h"
 
 namespace vi_ekf_slam::eval {
@@ -29,7 +29,7 @@ struct FeatureReplayResult {
 EkfSlamConfig eurocFeatureReplayConfig();
 
 /// Throws std::runtime_error if the data never shows a static interval.
-FeatureReplayResult replayFeatures(const FeatureTrackData& data, const std::vector<StampedPose>& truth,
+FeatureReplayResult replayFeatures(const io::FeatureTrackData& data, const std::vector<io::StampedPose>& truth,
                                    const EkfSlamConfig& config, const StaticInitParams& static_init);
 
 }  // namespace vi_ekf_slam::eval

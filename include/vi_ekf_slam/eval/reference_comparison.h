@@ -10,7 +10,7 @@
 #include <vector>
 
 #include "vi_ekf_slam/core/measurement_model.h"
-#include "vi_ekf_slam/eval/tum_io.h"
+#include "vi_ekf_slam/io/tum_io.h"
 
 namespace vi_ekf_slam::eval {
 
@@ -35,16 +35,16 @@ struct ReferenceComparison {
 /// The estimate as a reference of another frame or clock sees it: body poses moved to the camera
 /// through T_b_c (if given), and stamps moved from the IMU clock to the camera clock by each pose's
 /// time offset estimate t_d (t_image = t_imu - t_d; if given, one per pose).
-std::vector<StampedPose> referenceView(const std::vector<StampedPose>& body_poses,
-                                       const std::optional<CameraExtrinsics>& T_b_c,
-                                       const std::vector<double>* time_offsets_s = nullptr);
+std::vector<io::StampedPose> referenceView(const std::vector<io::StampedPose>& body_poses,
+                                           const std::optional<CameraExtrinsics>& T_b_c,
+                                           const std::vector<double>* time_offsets_s = nullptr);
 
 /// Interpolates `reference` (sorted by time) at each estimate stamp (linear position, slerp),
 /// where the two reference poses around it are at most max_gap_s apart, aligns the estimate onto
 /// it and measures.
 /// Throws std::invalid_argument with fewer than three matches.
-ReferenceComparison compareWithReference(const std::vector<StampedPose>& estimate,
-                                         const std::vector<StampedPose>& reference, Alignment alignment,
+ReferenceComparison compareWithReference(const std::vector<io::StampedPose>& estimate,
+                                         const std::vector<io::StampedPose>& reference, Alignment alignment,
                                          double max_gap_s = 0.5);
 
 }  // namespace vi_ekf_slam::eval

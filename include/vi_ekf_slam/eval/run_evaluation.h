@@ -14,7 +14,7 @@
 #include "vi_ekf_slam/core/camera_model.h"
 #include "vi_ekf_slam/core/measurement_model.h"
 #include "vi_ekf_slam/eval/metrics.h"
-#include "vi_ekf_slam/eval/tum_io.h"
+#include "vi_ekf_slam/io/tum_io.h"
 
 namespace vi_ekf_slam::eval {
 
@@ -67,7 +67,7 @@ struct RunMetrics {
 };
 
 /// truth must be sorted by time; estimates are matched to truth stamps within 1 ms.
-RunMetrics evaluateRun(const std::vector<EstimatedPose>& estimates, const std::vector<StampedPose>& truth,
+RunMetrics evaluateRun(const std::vector<EstimatedPose>& estimates, const std::vector<io::StampedPose>& truth,
                        const std::vector<EstimatedLandmark>& landmarks = {}, const LandmarkTruth& landmark_truth = {});
 
 /// summary.json / summary.md / timeseries.csv for runs keyed by name (e.g. per mechanization).

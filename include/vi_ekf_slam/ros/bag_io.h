@@ -14,7 +14,7 @@
 #include "vi_ekf_slam/core/measurement_model.h"
 #include "vi_ekf_slam/core/types.h"
 #include "vi_ekf_slam/eval/run_evaluation.h"
-#include "vi_ekf_slam/eval/tum_io.h"
+#include "vi_ekf_slam/io/tum_io.h"
 #include "vi_ekf_slam/sim/hallway.h"
 
 namespace vi_ekf_slam::glue {
@@ -53,7 +53,7 @@ class RigBagWriter {
 /// What an input bag says about itself: ground truth (z-up world), the simulated world if any,
 /// the camera calibration and the camera-IMU extrinsic (from /tf_static).
 struct InputBagInfo {
-  std::vector<eval::StampedPose> truth;
+  std::vector<io::StampedPose> truth;
   std::vector<sim::Quad> world;  ///< in {n}; empty for real data
   std::optional<CameraIntrinsics> camera;
   std::optional<CameraExtrinsics> T_b_c;

@@ -34,7 +34,7 @@ class RecordingSink : public OutputSink {
   /// If set, each pose is also kept in the filter's own world of the time (which starts over at
   /// every reset): `segments[k]` holds the poses after the k-th reset.
   const EkfSlamProcessor* processor = nullptr;
-  std::vector<std::vector<eval::StampedPose>> segments;
+  std::vector<std::vector<io::StampedPose>> segments;
 
   void odometry(const nav_msgs::Odometry& o) override;
   void landmarks(const std::vector<LandmarkOutput>& lms, const ros::Time&) override;

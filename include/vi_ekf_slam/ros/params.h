@@ -11,7 +11,7 @@
 #include "vi_ekf_slam/EkfSlamReconfigureConfig.h"
 #include "vi_ekf_slam/core/ekf_slam_config.h"
 #include "vi_ekf_slam/core/feature_tracker.h"
-#include "vi_ekf_slam/core/dynamic_initializer.h"
+#include "vi_ekf_slam/core/dynamic_init/dynamic_initializer.h"
 #include "vi_ekf_slam/core/static_initializer.h"
 #include "vi_ekf_slam/core/vio_pipeline.h"
 #include "vi_ekf_slam/ros/output_frames.h"
@@ -34,7 +34,7 @@ struct NodeOptions {
   std::string world_frame = "world";  ///< publish_tf world: the filter's world, z up
   /// The IMU/body frame; "": the frame_id of the IMU messages ("imu" if they carry none).
   std::string body_frame;
-  bool tune_allocator = true;           ///< see core/allocator_tuning.h
+  bool tune_allocator = true;           ///< see platform/allocator_tuning.h
   std::string camera_calibration_file;  ///< ROS camera YAML (intrinsics from a file)
   /// "camera_info": the driver's camera_info wins over a file; "file": the file's intrinsics are
   /// used and a differing camera_info is reported once and ignored.

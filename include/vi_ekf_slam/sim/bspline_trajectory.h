@@ -10,7 +10,7 @@
 #include <string>
 #include <vector>
 
-#include "vi_ekf_slam/eval/tum_io.h"
+#include "vi_ekf_slam/io/tum_io.h"
 #include "vi_ekf_slam/sim/trajectory.h"
 
 namespace vi_ekf_slam::sim {
@@ -19,7 +19,7 @@ class BsplineTrajectory : public Trajectory {
  public:
   /// poses: body in {n}, strictly increasing time. Throws std::invalid_argument if fewer than
   /// 4 knots result or the span is shorter than 4 knot spacings.
-  BsplineTrajectory(const std::vector<eval::StampedPose>& poses, double knot_spacing_s);
+  BsplineTrajectory(const std::vector<io::StampedPose>& poses, double knot_spacing_s);
 
   double startTime() const override;
   double endTime() const override;
@@ -34,7 +34,7 @@ class BsplineTrajectory : public Trajectory {
 
 /// Converts a TUM pose (z-up world {w}, e.g. ENU) to the navigation frame {n} of the filter
 /// (z down): a rotation by pi about x. The body frame is unchanged.
-eval::StampedPose worldZUpToNav(const eval::StampedPose& pose_w);
+io::StampedPose worldZUpToNav(const io::StampedPose& pose_w);
 
 /// Loads a TUM file as a C2 trajectory in {n}. Clear errors for unreadable, malformed or too
 /// short files (fewer than 4 poses or less than 1 s).

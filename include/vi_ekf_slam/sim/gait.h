@@ -8,7 +8,7 @@
 #include <cstdint>
 
 #include "vi_ekf_slam/core/so3.h"
-#include "vi_ekf_slam/eval/tum_io.h"
+#include "vi_ekf_slam/io/tum_io.h"
 
 namespace vi_ekf_slam::sim {
 
@@ -37,7 +37,7 @@ class Gait {
   /// The rig at time t [s] whose centreline point is `centre` with heading `heading` [rad] (yaw
   /// about the frame's z), walking at v [m/s]. The lateral offset is along the heading turned by
   /// +90 deg about z; the vertical along z.
-  eval::StampedPose pose(double t, Vec3 centre, double heading, double v) const;
+  io::StampedPose pose(double t, Vec3 centre, double heading, double v) const;
   double phase() const { return phase_; }
 
  private:

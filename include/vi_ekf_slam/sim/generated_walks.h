@@ -18,7 +18,7 @@
 #include <string>
 #include <vector>
 
-#include "vi_ekf_slam/eval/tum_io.h"
+#include "vi_ekf_slam/io/tum_io.h"
 
 namespace vi_ekf_slam::sim {
 
@@ -27,6 +27,6 @@ std::vector<std::string> generatedWalkKinds(bool suite_only);
 
 /// The walk of a kind: poses at 100 Hz from t = 0, z up, body x forward (a TUM trajectory).
 /// Throws std::invalid_argument for an unknown kind.
-std::vector<eval::StampedPose> generatedWalk(const std::string& kind);
+std::vector<io::StampedPose> generatedWalk(const std::string& kind);
 
 }  // namespace vi_ekf_slam::sim

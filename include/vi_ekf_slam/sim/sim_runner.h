@@ -11,7 +11,7 @@
 #include <string>
 #include <vector>
 
-#include "vi_ekf_slam/core/dynamic_initializer.h"
+#include "vi_ekf_slam/core/dynamic_init/dynamic_initializer.h"
 #include "vi_ekf_slam/core/ekf_slam.h"
 #include "vi_ekf_slam/core/vio_pipeline.h"
 #include "vi_ekf_slam/sim/camera_simulator.h"

@@ -1,4 +1,4 @@
-#include "vi_ekf_slam/eval/datasets.h"
+#include "vi_ekf_slam/io/datasets.h"
 
 #include <algorithm>
 #include <filesystem>
@@ -8,7 +8,7 @@
 #include <sstream>
 #include <stdexcept>
 
-namespace vi_ekf_slam::eval {
+namespace vi_ekf_slam::io {
 
 namespace {
 
@@ -251,4 +251,4 @@ FeatureTrackData readEqvioCsv(const std::string& path, int width, int height) {
   return d;
 }
 
-}  // namespace vi_ekf_slam::eval
+}  // namespace vi_ekf_slam::io

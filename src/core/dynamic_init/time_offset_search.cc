@@ -1,4 +1,4 @@
-#include "vi_ekf_slam/core/alignment/time_offset_search.h"
+#include "vi_ekf_slam/core/dynamic_init/time_offset_search.h"
 
 #include <algorithm>
 #include <cmath>

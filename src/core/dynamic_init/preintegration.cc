@@ -1,4 +1,4 @@
-#include "vi_ekf_slam/core/alignment/preintegration.h"
+#include "vi_ekf_slam/core/dynamic_init/preintegration.h"
 
 #include <algorithm>
 

@@ -1,4 +1,4 @@
-#include "vi_ekf_slam/core/alignment/alignment_uncertainty.h"
+#include "vi_ekf_slam/core/dynamic_init/alignment_uncertainty.h"
 
 #include <Eigen/Eigenvalues>
 #include <algorithm>

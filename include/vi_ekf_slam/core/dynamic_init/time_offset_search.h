@@ -6,7 +6,7 @@
 // there.
 #pragma once
 
-#include "vi_ekf_slam/core/alignment/alignment_problem.h"
+#include "vi_ekf_slam/core/dynamic_init/alignment_problem.h"
 
 namespace vi_ekf_slam {
 namespace alignment {

@@ -17,8 +17,8 @@
 #include <deque>
 #include <vector>
 
-#include "vi_ekf_slam/core/alignment/preintegration.h"
-#include "vi_ekf_slam/core/alignment/track_selection.h"
+#include "vi_ekf_slam/core/dynamic_init/preintegration.h"
+#include "vi_ekf_slam/core/dynamic_init/track_selection.h"
 #include "vi_ekf_slam/core/camera_model.h"
 #include "vi_ekf_slam/core/measurement_model.h"
 #include "vi_ekf_slam/core/types.h"

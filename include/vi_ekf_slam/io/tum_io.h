@@ -1,4 +1,5 @@
-// TUM trajectory files: one pose a line, `t x y z qx qy qz qw` (body in world), `#` comments.
+// TUM trajectory files (io/: the files of trajectories and recordings, shared by the simulator
+// and the evaluation): one pose a line, `t x y z qx qy qz qw` (body in world), `#` comments.
 // Written as evo, ov_eval and rpg_trajectory_evaluation read them: 8 numbers separated by one
 // space. The pose covariances go to a file of their own (writePoseCovariances): a TUM file with
 // more columns is refused by evo and misread by ov_eval (which takes 20+ columns as an
@@ -12,7 +13,7 @@
 
 #include "vi_ekf_slam/core/so3.h"
 
-namespace vi_ekf_slam::eval {
+namespace vi_ekf_slam::io {
 
 struct StampedPose {
   double t = 0.0;
@@ -42,4 +43,4 @@ void writePoseCovariances(const std::string& path, const std::vector<StampedPose
 /// many got a covariance. Throws std::runtime_error for malformed lines.
 int readPoseCovariances(const std::string& path, std::vector<StampedPose>* poses);
 
-}  // namespace vi_ekf_slam::eval
+}  // namespace vi_ekf_slam::io

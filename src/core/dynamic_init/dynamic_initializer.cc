@@ -1,4 +1,4 @@
-#include "vi_ekf_slam/core/dynamic_initializer.h"
+#include "vi_ekf_slam/core/dynamic_init/dynamic_initializer.h"
 
 #include <Eigen/Eigenvalues>
 #include <algorithm>
@@ -7,10 +7,10 @@
 #include <sstream>
 #include <variant>
 
-#include "vi_ekf_slam/core/alignment/alignment_problem.h"
-#include "vi_ekf_slam/core/alignment/alignment_uncertainty.h"
-#include "vi_ekf_slam/core/alignment/time_offset_search.h"
-#include "vi_ekf_slam/core/alignment/track_selection.h"
+#include "vi_ekf_slam/core/dynamic_init/alignment_problem.h"
+#include "vi_ekf_slam/core/dynamic_init/alignment_uncertainty.h"
+#include "vi_ekf_slam/core/dynamic_init/time_offset_search.h"
+#include "vi_ekf_slam/core/dynamic_init/track_selection.h"
 #include "vi_ekf_slam/core/param_ranges.h"
 
 namespace vi_ekf_slam {

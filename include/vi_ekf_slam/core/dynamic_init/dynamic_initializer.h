@@ -4,7 +4,7 @@
 // Martinelli's closed-form solution). With the attitude from the gyro and the IMU's position
 // increments alpha_k (A_k = d alpha_k / d b_a), the camera at frame k sees feature f at
 //   p_c = R_c_k (p_f - v_0 t_k - g t_k^2 / 2 - alpha_k - A_k b_a) - R_b_c^T p_b_c.
-// The stages, each in core/alignment/: track selection, IMU preintegration, the alignment problem
+// The stages, each in core/dynamic_init/: track selection, IMU preintegration, the alignment problem
 // (linear solution, then refinement on the reprojection error), the camera-IMU time-offset
 // search, and the uncertainty.
 // The covariance of the solution (features eliminated) gives the initial uncertainty of velocity,

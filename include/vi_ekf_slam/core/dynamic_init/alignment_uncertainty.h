@@ -10,9 +10,9 @@
 #include <deque>
 #include <vector>
 
-#include "vi_ekf_slam/core/alignment/alignment_problem.h"
-#include "vi_ekf_slam/core/alignment/time_offset_search.h"
-#include "vi_ekf_slam/core/dynamic_initializer.h"
+#include "vi_ekf_slam/core/dynamic_init/alignment_problem.h"
+#include "vi_ekf_slam/core/dynamic_init/time_offset_search.h"
+#include "vi_ekf_slam/core/dynamic_init/dynamic_initializer.h"
 
 namespace vi_ekf_slam {
 namespace alignment {

@@ -1,10 +1,12 @@
-#include "vi_ekf_slam/sim/monte_carlo.h"
+#include "vi_ekf_slam/eval/monte_carlo.h"
 
 #include <algorithm>
 #include <cmath>
 #include <numeric>
 
-namespace vi_ekf_slam::sim {
+namespace vi_ekf_slam::eval {
+
+using namespace sim;  // the simulator it runs
 
 namespace {
 
@@ -59,9 +61,9 @@ void strapdownFrameErrors(const FilterState& s, const TrajectorySample& tr, cons
   const Vec3 p_s_b_true = q_n_s_true.conjugate() * (tr.p_n_b - p_n_s_true);
   const Quat q_s_b_true = q_n_s_true.conjugate() * tr.q_n_b;
   m->e_p_sb = p_s_b_true - s.x.p_s_b;
-  m->e_q_sb = eval::orientationError(q_s_b_true, s.x.q_s_b);
+  m->e_q_sb = orientationError(q_s_b_true, s.x.q_s_b);
   m->e_p_ns = p_n_s_true - s.x.p_n_s;
-  m->e_q_ns = eval::orientationError(q_n_s_true, s.x.q_n_s);
+  m->e_q_ns = orientationError(q_n_s_true, s.x.q_n_s);
   m->s_p_sb = sigmas(Ps, idx::kP);
   m->s_q_sb = sigmas(Ps, idx::kPsi);
   m->s_p_ns = sigmas(Ps, idx::kPns);
@@ -73,22 +75,22 @@ void trajectoryMetrics(const std::vector<Vec3>& p_true, const std::vector<Vec3>&
                        const std::vector<double>& q_err_deg, RunResult* out) {
   std::vector<Vec3> e;
   for (size_t i = 0; i < p_true.size(); ++i) e.push_back(p_true[i] - p_est[i]);
-  out->ate_position_m = eval::rms(e);
-  const eval::YawTranslation T = eval::alignPosYaw(p_est, p_true);
+  out->ate_position_m = rms(e);
+  const YawTranslation T = alignPosYaw(p_est, p_true);
   std::vector<Vec3> e_aligned;
   double filter_s = 0.0;
   for (size_t i = 0; i < p_true.size(); ++i) e_aligned.push_back(p_true[i] - T.apply(p_est[i]));
   for (const auto& f : out->frames) filter_s += f.update_ms * 1e-3;
-  out->ate_posyaw_m = eval::rms(e_aligned);
+  out->ate_posyaw_m = rms(e_aligned);
   if (out->frames.size() > 1 && filter_s > 0.0) {
     out->real_time_factor = (out->frames.back().t - out->frames.front().t) / filter_s;
   }
-  out->ate_orientation_deg = eval::rms(q_err_deg);
+  out->ate_orientation_deg = rms(q_err_deg);
   out->final_position_error_m = e.empty() ? 0.0 : e.back().norm();
-  out->distance_m = eval::pathLength(p_true);
+  out->distance_m = pathLength(p_true);
   std::vector<double> t;
   for (const auto& f : out->frames) t.push_back(f.t);
-  out->revisits = eval::revisitErrors(t, p_true, p_est);
+  out->revisits = revisitErrors(t, p_true, p_est);
 }
 
 }  // namespace
@@ -134,7 +136,7 @@ RunResult runMonteCarloRun(const Scenario& scenario_in, const EkfSlamConfig& con
     m.p_true = tr.p_n_b;
     m.p_est = n.p_n_b;
     m.e_p = tr.p_n_b - n.p_n_b;
-    m.e_q = eval::orientationError(tr.q_n_b, n.q_n_b);
+    m.e_q = orientationError(tr.q_n_b, n.q_n_b);
     m.e_v = tr.v_n_b - n.v_n_b;
     m.e_ba = rec.true_accel_bias - n.b_a;
     m.e_bg = rec.true_gyro_bias - n.b_g;
@@ -146,9 +148,9 @@ RunResult runMonteCarloRun(const Scenario& scenario_in, const EkfSlamConfig& con
     m.s_bg = sigmas(C, idx::kBg);
     Eigen::Matrix<double, 6, 1> e6;
     e6 << m.e_p, m.e_q;
-    m.nees_pose = eval::nees(e6, n.poseCovariance());
-    m.nees_p = eval::nees(m.e_p, C.block<3, 3>(idx::kP, idx::kP));
-    m.nees_q = eval::nees(m.e_q, C.block<3, 3>(idx::kPsi, idx::kPsi));
+    m.nees_pose = nees(e6, n.poseCovariance());
+    m.nees_p = nees(m.e_p, C.block<3, 3>(idx::kP, idx::kP));
+    m.nees_q = nees(m.e_q, C.block<3, 3>(idx::kPsi, idx::kPsi));
     const FilterState& s = f.state();
     // A composition in this frame already moved the filter's {s} to the current body frame.
     if (rec.result.composed) {
@@ -162,7 +164,7 @@ RunResult runMonteCarloRun(const Scenario& scenario_in, const EkfSlamConfig& con
       truth.push_back(landmarkOfTrack(l.id, sc.world).p_n);
       out.landmark_estimates[l.id] = l.p_n_l;
     }
-    m.gamma = eval::scaleRatio(est, truth);
+    m.gamma = scaleRatio(est, truth);
     m.landmarks = s.numLandmarks();
     m.new_landmarks = static_cast<int>(rec.result.new_ids.size());
     m.new_triangulated = rec.result.new_triangulated;
@@ -206,7 +208,7 @@ ConsistencySummary summarize(const std::string& name, const std::vector<RunResul
   for (const auto& r : runs) T = std::min(T, r.frames.size());
   for (auto& r : runs) r.frames.resize(T);
   const double M = static_cast<double>(runs.size());
-  s.pose_band = eval::neesBand(6, s.runs);
+  s.pose_band = neesBand(6, s.runs);
   int inside = 0, counted = 0;
   std::vector<double> times;
   for (size_t k = 0; k < T; ++k) {
@@ -291,4 +293,4 @@ ConsistencySummary summarize(const std::string& name, const std::vector<RunResul
   return s;
 }
 
-}  // namespace vi_ekf_slam::sim
+}  // namespace vi_ekf_slam::eval

@@ -1,4 +1,4 @@
-#include "vi_ekf_slam/core/alignment/track_selection.h"
+#include "vi_ekf_slam/core/dynamic_init/track_selection.h"
 
 #include <algorithm>
 #include <map>

@@ -1,4 +1,4 @@
-#include "vi_ekf_slam/core/alignment/alignment_problem.h"
+#include "vi_ekf_slam/core/dynamic_init/alignment_problem.h"
 
 #include <Eigen/Cholesky>
 #include <Eigen/Eigenvalues>

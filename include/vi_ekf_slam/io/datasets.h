@@ -10,9 +10,9 @@
 #include "vi_ekf_slam/core/imu_propagation.h"
 #include "vi_ekf_slam/core/measurement_model.h"
 #include "vi_ekf_slam/core/types.h"
-#include "vi_ekf_slam/eval/tum_io.h"
+#include "vi_ekf_slam/io/tum_io.h"
 
-namespace vi_ekf_slam::eval {
+namespace vi_ekf_slam::io {
 
 /// An ASL sensor.yaml: intrinsics, radial-tangential distortion, T_BS (sensor in body).
 struct AslCamera {
@@ -64,4 +64,4 @@ struct FeatureTrackData {
 };
 FeatureTrackData readEqvioCsv(const std::string& path, int width = 752, int height = 480);
 
-}  // namespace vi_ekf_slam::eval
+}  // namespace vi_ekf_slam::io

@@ -1,4 +1,4 @@
-#include "vi_ekf_slam/core/allocator_tuning.h"
+#include "vi_ekf_slam/platform/allocator_tuning.h"
 
 #include <cstdlib>  // defines __GLIBC__ on glibc systems
 

@@ -1,4 +1,4 @@
-// Monte-Carlo consistency runs (paper Sec. IV-A, repeated M times): each run draws its own
+// Monte-Carlo consistency runs of the simulator (paper Sec. IV-A, repeated M times): each run draws its own
 // sensor noise, initial biases and initial state error from the filter's own initial
 // covariance, so the NEES measures consistency honestly. Per camera time it records errors in
 // {n} (and, for sensor-centric filters, in {s} and of p_n_s, q_n_s) with the filter's sigmas,
@@ -13,7 +13,7 @@
 #include "vi_ekf_slam/eval/metrics.h"
 #include "vi_ekf_slam/sim/sim_runner.h"
 
-namespace vi_ekf_slam::sim {
+namespace vi_ekf_slam::eval {
 
 struct FrameMetrics {
   double t = 0.0;
@@ -58,7 +58,7 @@ struct RunResult {
   /// the prior; NaN when a dynamic start never initialized) [s]. The frames start there.
   double init_delay_s = 0.0;
   /// Coming back to places seen more than 20 s before (within 0.5 m): the errors then and again.
-  eval::RevisitErrors revisits;
+  RevisitErrors revisits;
 };
 
 /// Draws the initial estimate: truth minus an error ~ N(0, P0) of the world-centric prior
@@ -67,7 +67,7 @@ NavState drawInitialEstimate(const NavState& truth, const InitialUncertainty& u,
 
 /// One run with its own seed; the initial biases of the simulated IMU are drawn with the
 /// filter's prior sigmas.
-RunResult runMonteCarloRun(const Scenario& scenario, const EkfSlamConfig& config, std::uint64_t seed);
+RunResult runMonteCarloRun(const sim::Scenario& scenario, const EkfSlamConfig& config, std::uint64_t seed);
 
 /// The first seconds after the initialization, whose NEES says whether a start is honest [s].
 constexpr double kEarlyWindowS = 10.0;
@@ -83,7 +83,7 @@ struct ConsistencySummary {
   double ate_position_m = 0.0;            ///< mean over runs of the per-run position RMSE
   double ate_posyaw_m = 0.0;              ///< the same after posyaw alignment
   /// Over the runs that came back to places: the mean of their error on return over their error
-  /// when the place was first seen (eval::RevisitErrors::ratio; NaN when no run came back).
+  /// when the place was first seen (RevisitErrors::ratio; NaN when no run came back).
   double revisit_error_ratio = std::nan("");
   /// Keeping the map: accepted re-observations of dormant landmarks per run, and how many of all
   /// the runs' were of another point (a false closure the filter believed).
@@ -102,7 +102,7 @@ struct ConsistencySummary {
   double final_scale_ratio = 0.0;
   double mean_update_ms = 0.0;
   double p95_update_ms = 0.0;
-  eval::NeesBand pose_band;
+  NeesBand pose_band;
   // Run-averaged time series (same length as the runs' frames); gamma as the run median, since
   // the landmarks initialized in a frame make single runs spike (as the paper notes).
   std::vector<double> t, avg_nees_p, avg_nees_q, avg_nees_pose, median_gamma, rms_p;
@@ -114,4 +114,4 @@ struct ConsistencySummary {
 
 ConsistencySummary summarize(const std::string& name, const std::vector<RunResult>& runs);
 
-}  // namespace vi_ekf_slam::sim
+}  // namespace vi_ekf_slam::eval

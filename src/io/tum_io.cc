@@ -1,4 +1,4 @@
-#include "vi_ekf_slam/eval/tum_io.h"
+#include "vi_ekf_slam/io/tum_io.h"
 
 #include <algorithm>
 #include <cmath>
@@ -7,7 +7,7 @@
 #include <sstream>
 #include <stdexcept>
 
-namespace vi_ekf_slam::eval {
+namespace vi_ekf_slam::io {
 
 std::vector<StampedPose> readTum(const std::string& path) {
   std::ifstream in(path);
@@ -127,4 +127,4 @@ std::optional<StampedPose> interpolatePose(const std::vector<StampedPose>& poses
   return p;
 }
 
-}  // namespace vi_ekf_slam::eval
+}  // namespace vi_ekf_slam::io
