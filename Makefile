@@ -16,6 +16,8 @@ NATIVE   ?= OFF
 export DATA_DIR
 DEVEL    := $(WS)/devel
 BIN      := $(DEVEL)/lib/vi_ekf_slam
+# The scripts write their reports with the built vi_ekf_slam_report (tools/report.py).
+export VI_EKF_SLAM_BIN := $(BIN)
 CATKIN   := cd $(WS) && catkin_make -j$(JOBS) -DCMAKE_BUILD_TYPE=Release -DDATA_DIR=$(DATA_DIR) -DCMAKE_EXPORT_COMPILE_COMMANDS=ON -DVI_EKF_SLAM_NATIVE_ARCH=$(NATIVE)
 
 .PHONY: all deps workspace build test lint demo study suite initsuite bag screenshot bench soak realdata faults extrinsic params results rebuild-check clean help

@@ -11,84 +11,47 @@ With --study, also the study on the built-in walk (8 runs, the default configura
 start (the dynamic initializer, the filter's prior, the truth), the extrinsic true or DEG / M off,
 fixed or estimated: ATE, run-averaged pose NEES and its band.
 
-Writes OUT/extrinsic.json and OUT/extrinsic.md (the report schema of tools/report.py).
+Writes OUT/extrinsic.json and OUT/extrinsic.md (the report schema of eval/report.h).
 
 usage: extrinsic_perturbation.py --bin DIR --bag BAG --rig RIG.yaml --reference CAMERA_POSES.tum [--out DIR]
                                  [--deg 3] [--m 0.03] [--study]
 """
 import argparse
-import math
 import os
-import re
 import subprocess
 import sys
 from concurrent.futures import ThreadPoolExecutor
 
-import numpy as np
-
 import report
 
 MECH = "sensor_centric_composition"
-# The perturbations' axes: each turns about one and moves along another.
+# The perturbations' axes: each turns about one and moves along another (run_bag --extrinsic-error).
 TURN_AXES = [(1, 0, 0), (0, 1, 0), (0, 0, 1), (1, 1, 1)]
 MOVE_AXES = [(0, 1, 0), (0, 0, 1), (1, 0, 0), (1, -1, 1)]
 
 
-def quat_mul(a, b):
-    """Hamilton product of quaternions (x, y, z, w)."""
-    ax, ay, az, aw = a
-    bx, by, bz, bw = b
-    return np.array([aw * bx + ax * bw + ay * bz - az * by, aw * by - ax * bz + ay * bw + az * bx,
-                     aw * bz + ax * by - ay * bx + az * bw, aw * bw - ax * bx - ay * by - az * bz])
-
-
-def quat_from_rotvec(v):
-    angle = np.linalg.norm(v)
-    if angle == 0.0:
-        return np.array([0.0, 0.0, 0.0, 1.0])
-    return np.concatenate([np.sin(angle / 2) * v / angle, [np.cos(angle / 2)]])
-
-
-def angle_between_deg(a, b):
-    """The rotation angle from quaternion b to a [deg]."""
-    d = abs(float(np.dot(a / np.linalg.norm(a), b / np.linalg.norm(b))))
-    return math.degrees(2.0 * math.acos(min(1.0, d)))
-
-
-def rig_extrinsic(rig):
-    """T_b_c (x y z qx qy qz qw) of a rig file: its one `T_b_c: [...]` line."""
-    with open(rig) as f:
-        m = re.search(r"^T_b_c:\s*\[([^\]]*)\]", f.read(), re.M)
-    if not m:
-        sys.exit("extrinsic_perturbation: %s has no T_b_c line" % rig)
-    return [float(v) for v in m.group(1).split(",")]
-
-
-def perturbed(T, k, deg, m):
-    turn = np.array(TURN_AXES[k], float)
-    move = np.array(MOVE_AXES[k], float)
-    q = quat_mul(quat_from_rotvec(math.radians(deg) * turn / np.linalg.norm(turn)), np.array(T[3:]))
-    return list(np.array(T[:3]) + m * move / np.linalg.norm(move)) + list(q / np.linalg.norm(q))
-
-
-def run_bag(a, name, T, estimate, T_rig):
+def run_bag(a, name, k, estimate):
+    """Run k of the real recording (k < 0: the rig file's extrinsic, else perturbation k)."""
     out = os.path.join(a.out, "real", name)
     cmd = [os.path.join(a.bin, "vi_ekf_slam_run_bag"), "--bag", a.bag, "--out", out, "--mechanization", MECH,
            "--no-plots", "--rig", a.rig, "--param", "estimate_extrinsic=%s" % ("true" if estimate else "false"),
-           "--param", "T_b_c=[%s]" % ",".join("%.12g" % v for v in T), "--reference", a.reference,
-           "--reference-frame", "camera", "--reference-clock", "camera"]
+           "--reference", a.reference, "--reference-frame", "camera", "--reference-clock", "camera"]
+    if k >= 0:
+        cmd += ["--extrinsic-error", ",".join("%g" % v for v in [a.deg, a.m] + list(TURN_AXES[k]) + list(MOVE_AXES[k]))]
     proc = subprocess.run(cmd, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
     if proc.returncode != 0:
         sys.exit("extrinsic_perturbation: run_bag failed:\n%s" % proc.stdout[-3000:])
     h = report.load(os.path.join(out, "health.json"))["runs"][MECH]
+    e = h.get("extrinsic_error", {"given": {"deg": 0.0, "m": 0.0}})
     row = {"given": name.split(" ")[0], "extrinsic": "estimated" if estimate else "fixed", "resets": h["resets"],
            "rmse_m": h["references"][0]["position_rmse_m"], "rotation_deg": h["references"][0]["rotation_rmse_deg"],
-           "given_off_deg": angle_between_deg(np.array(T[3:]), np.array(T_rig[3:])),
-           "given_off_cm": 100.0 * float(np.linalg.norm(np.array(T[:3]) - np.array(T_rig[:3])))}
-    if estimate and "extrinsic" in h:
-        E = h["extrinsic"]["T_b_c"]
-        row["final_off_deg"] = angle_between_deg(np.array(E[3:]), np.array(T_rig[3:]))
-        row["final_off_cm"] = 100.0 * float(np.linalg.norm(np.array(E[:3]) - np.array(T_rig[:3])))
+           "given_off_deg": e["given"]["deg"], "given_off_cm": 100.0 * e["given"]["m"]}
+    if estimate:
+        # How far the estimate ended from the rig file's (run_bag: "final", or with the rig's
+        # extrinsic given, how far it moved).
+        final = e.get("final") or {"deg": h["extrinsic"]["moved_deg"], "m": h["extrinsic"]["moved_m"]}
+        row["final_off_deg"] = final["deg"]
+        row["final_off_cm"] = 100.0 * final["m"]
     return name, row
 
 
@@ -108,7 +71,7 @@ def study_rows(a):
                 r = report.load(os.path.join(o, "summary.json"))
                 d, band = r["runs"]["default"], r["config"]["pose_nees_band"]
                 rows[name] = {"start": start, "given": "off" if off else "true",
-                              "extrinsic": "estimated" if estimate else "fixed", "ate_m": d["ate_position_m"],
+                              "extrinsic": "estimated" if estimate else "fixed", "ate_position_m": d["ate_position_m"],
                               "nees_pose": d["nees_pose"], "inside_band": band[0] <= d["nees_pose"] <= band[1],
                               "consistent_fraction": d["consistent_fraction"], "band_lo": band[0],
                               "band_hi": band[1]}
@@ -128,15 +91,13 @@ def main():
     ap.add_argument("--m", type=float, default=0.03, help="the perturbations' translation [m]")
     ap.add_argument("--study", action="store_true", help="also the study on the built-in walk")
     a = ap.parse_args()
-    T_rig = rig_extrinsic(a.rig)
     jobs = []
     for k in range(-1, len(TURN_AXES)):
         name = "rig" if k < 0 else "perturbed%d" % (k + 1)
-        T = T_rig if k < 0 else perturbed(T_rig, k, a.deg, a.m)
-        jobs += [(name + " fixed", T, False), (name + " estimated", T, True)]
+        jobs += [(name + " fixed", k, False), (name + " estimated", k, True)]
     rows = {}
     with ThreadPoolExecutor(2) as pool:
-        for name, row in pool.map(lambda j: run_bag(a, j[0], j[1], j[2], T_rig), jobs):
+        for name, row in pool.map(lambda j: run_bag(a, j[0], j[1], j[2]), jobs):
             rows[name] = row
             print("%-24s resets %d, RMSE %.3f m, rotation %.2f deg%s" % (
                 name, row["resets"], row["rmse_m"], row["rotation_deg"],
@@ -149,9 +110,7 @@ def main():
         ("given_off_deg", "given off [deg]", 2), ("given_off_cm", "given off [cm]", 1), ("resets", "resets", 0),
         ("rmse_m", "RMSE [m]", 3), ("rotation_deg", "rotation [deg]", 2), ("final_off_deg", "final off [deg]", 2),
         ("final_off_cm", "final off [cm]", 1)],
-        table_columns={"study": [("ate_m", "ATE [m]", 3), ("nees_pose", "NEES pose", 2), ("band_lo", "band from", 2),
-                                 ("band_hi", "to", 2), ("inside_band", "inside", 0),
-                                 ("consistent_fraction", "consistent", 2)]},
+        table_columns={"study": report.STUDY_COLUMNS},
         headings={"study": "The study on the built-in walk (8 runs, default configuration), per start"},
         notes=["RMSE, rotation: Sim(3) against the reference camera poses over the whole run; off: from the rig "
                "file's extrinsic (the calibration)."])

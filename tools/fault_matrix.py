@@ -36,7 +36,7 @@ def study_rows(bin_dir, out):
         subprocess.run(cmd, check=True, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
         r = report.load(os.path.join(o, "summary.json"))
         d, band = r["runs"]["default"], r["config"]["pose_nees_band"]
-        rows["study / " + name] = {"fault": name, "ate_m": d["ate_position_m"], "nees_pose": d["nees_pose"],
+        rows["study / " + name] = {"fault": name, "ate_position_m": d["ate_position_m"], "nees_pose": d["nees_pose"],
                                    "band_lo": band[0], "band_hi": band[1],
                                    "inside_band": band[0] <= d["nees_pose"] <= band[1],
                                    "consistent_fraction": d["consistent_fraction"]}
@@ -114,9 +114,7 @@ def main():
         ("error_m", "error [m]", 3), ("error_over_clean", "x clean", 2), ("imu_bridged", "IMU bridged", 0),
         ("imu_dropped_nonfinite", "IMU non-finite", 0), ("imu_gaps", "IMU gaps", 0), ("image_gaps", "image gaps", 0),
         ("images_without_features", "images w/o features", 0)],
-        table_columns={"study": [("ate_m", "ATE [m]", 3), ("nees_pose", "NEES pose", 2), ("band_lo", "band from", 2),
-                                 ("band_hi", "to", 2), ("inside_band", "inside", 0),
-                                 ("consistent_fraction", "consistent", 2)]},
+        table_columns={"study": report.STUDY_COLUMNS},
         headings={"study": "The study on the built-in walk (8 runs, default configuration) with the simulator's faults"},
         notes=["error: Sim(3) RMSE against the reference, or the ATE against the bag's ground truth; the whole run "
                "in the continuous odom frame."])

@@ -1,16 +1,21 @@
-"""The one report schema of the tools, from Python (eval/report.h writes the same from C++):
+"""The scripts' side of the one report schema (eval/report.h):
 
   {"schema": "vi_ekf_slam.report/1", "tool": ..., "title": ..., "config": {settings},
    "runs": {name: {metric: value}}, "tables": {name: {row: {column: value}}}}
 
-("tables" only with more tables than the runs; non-finite numbers as null) and the same as
-Markdown: the title, the settings, one table per table, notes.
+report() builds the object; write_report() hands it to vi_ekf_slam_report, the C++ tools' own
+writer of the JSON and the Markdown (a column given as a metric key takes the one header and
+precision of eval/report_columns.h); load() reads any tool's report.
 """
 import json
 import math
 import os
+import shutil
+import subprocess
 
 SCHEMA = "vi_ekf_slam.report/1"
+# The study's rows in the scripts' tables (fault_matrix.py, extrinsic_perturbation.py): metric keys.
+STUDY_COLUMNS = ["ate_position_m", "nees_pose", "band_lo", "band_hi", "inside_band", "consistent_fraction"]
 
 
 def _clean(v):
@@ -24,34 +29,6 @@ def _clean(v):
     return v
 
 
-def _cell(v, digits):
-    if v is None:
-        return "-"
-    if isinstance(v, bool):
-        return "yes" if v else "no"
-    if isinstance(v, int):
-        return str(v)
-    if isinstance(v, float):
-        return "%.*f" % (digits, v) if math.isfinite(v) else "-"
-    return str(v)
-
-
-def _table(rows, columns, heading=None):
-    """Markdown lines of a table: rows {name: {key: value}}, columns [(key, header, digits)] (None:
-    every key of the rows, 3 decimals)."""
-    if columns is None:
-        keys = []
-        for row in rows.values():
-            keys += [k for k in row if k not in keys]
-        columns = [(k, k, 3) for k in keys]
-    out = ["## " + heading, ""] if heading else []
-    out.append("| |" + "".join(" %s |" % c[1] for c in columns))
-    out.append("|---|" + "---|" * len(columns))
-    for name, row in rows.items():
-        out.append("| %s |" % name + "".join(" %s |" % _cell(row.get(c[0]), c[2]) for c in columns))
-    return out + [""]
-
-
 def report(tool, title, config, runs, tables=None):
     """The JSON object of a report (tables: {name: rows})."""
     r = {"schema": SCHEMA, "tool": tool, "title": title, "config": config, "runs": runs}
@@ -60,29 +37,25 @@ def report(tool, title, config, runs, tables=None):
     return _clean(r)
 
 
-def markdown(r, columns=None, table_columns=None, headings=None, notes=()):
-    """The Markdown of a report object: columns of the runs' table, and per extra table its
-    columns and heading."""
-    settings = ", ".join("%s %s" % (k, v) for k, v in r["config"].items())
-    lines = ["# " + r["title"], ""] + (["Settings: %s." % settings, ""] if settings else [])
-    lines += _table(r["runs"], columns)
-    for name, rows in r.get("tables", {}).items():
-        lines += _table(rows, (table_columns or {}).get(name), (headings or {}).get(name))
-    for n in notes:
-        lines += [n, ""]
-    return "\n".join(lines)
+def _writer():
+    """vi_ekf_slam_report: in VI_EKF_SLAM_BIN, beside this module (installed), on PATH, or by rosrun."""
+    for d in (os.environ.get("VI_EKF_SLAM_BIN"), os.path.dirname(os.path.abspath(__file__))):
+        if d and os.access(os.path.join(d, "vi_ekf_slam_report"), os.X_OK):
+            return [os.path.join(d, "vi_ekf_slam_report")]
+    found = shutil.which("vi_ekf_slam_report")
+    return [found] if found else ["rosrun", "vi_ekf_slam", "vi_ekf_slam_report"]
 
 
-def write_report(out_dir, stem, r, **md):
-    """OUT_DIR/STEM.json and OUT_DIR/STEM.md; returns the Markdown."""
-    os.makedirs(out_dir, exist_ok=True)
-    with open(os.path.join(out_dir, stem + ".json"), "w") as f:
-        json.dump(r, f, indent=2)
-        f.write("\n")
-    text = markdown(r, **md)
-    with open(os.path.join(out_dir, stem + ".md"), "w") as f:
-        f.write(text)
-    return text
+def write_report(out_dir, stem, r, columns=None, table_columns=None, headings=None, notes=()):
+    """OUT_DIR/STEM.json and OUT_DIR/STEM.md; returns the Markdown. columns (of the runs' table)
+    and table_columns {table: columns}: metric keys, or (key, header, digits) for a script's own
+    column; None: every key of the rows."""
+    spec = {"out": out_dir, "stem": stem, "report": r, "columns": columns, "table_columns": table_columns or {},
+            "headings": headings or {}, "notes": list(notes)}
+    p = subprocess.run(_writer(), input=json.dumps(_clean(spec)), capture_output=True, text=True)
+    if p.returncode != 0:
+        raise RuntimeError("vi_ekf_slam_report: " + p.stderr.strip())
+    return p.stdout
 
 
 def load(path):

@@ -112,7 +112,7 @@ def suite_section(results):
             text.append("| %s | %s | failed: %s | | | | |" % (r["case"], r["config"], r["failed"]))
             continue
         text.append("| %s | %s | %s | %s | %s | %s | %s |" % (
-            r["case"], r["config"], f(r["ate_m"]), f(r["ate_posyaw_m"]), f(r["nees_pose"], 2),
+            r["case"], r["config"], f(r["ate_position_m"]), f(r["ate_posyaw_m"]), f(r["nees_pose"], 2),
             f(r["consistent_fraction"], 2), f(r["ate_over_best_paper"], 2)))
     cases = len({r["case"] for r in s["rows"]})
     text += ["", "Worst case over the %d cases:" % cases, "",
@@ -174,7 +174,7 @@ def faults_section(results):
         text += ["", "The study on the built-in walk (8 runs, seed 1, default configuration) with the simulator's "
                  "faults:", "", "| fault | ATE [m] | NEES pose | band | consistent |", "|---|---|---|---|---|"]
         for x in study.values():
-            text.append("| %s | %s | %s | [%.2f, %.2f] | %s |" % (x["fault"], f(x["ate_m"]), f(x["nees_pose"], 2),
+            text.append("| %s | %s | %s | [%.2f, %.2f] | %s |" % (x["fault"], f(x["ate_position_m"]), f(x["nees_pose"], 2),
                                                                   x["band_lo"], x["band_hi"],
                                                                   f(x["consistent_fraction"], 2)))
     faulty = [x for x in r["runs"].values() if x["fault"] != "clean"]

@@ -59,6 +59,13 @@ std::vector<io::StampedPose> referenceView(const glue::RecordingSink& sink, cons
                              clock == "camera" ? &offsets : nullptr);
 }
 
+/// A calibration given wrong on purpose: the parameters' T_b_c turned by deg about `turn` (in the
+/// body frame, R_b_c' = Exp(deg turn) R_b_c) and moved by m along `move`.
+struct ExtrinsicError {
+  double deg = 0.0, m = 0.0;
+  Vec3 turn = Vec3::UnitX(), move = Vec3::UnitY();
+};
+
 /// The command line.
 struct Options {
   std::string bag, out, config, rig, mechanization;
@@ -70,6 +77,7 @@ struct Options {
   std::vector<std::string> params;    ///< name=value
   std::vector<double> reset_at_s;     ///< forced resets (the ~reset service), seconds after the bag's start
   bool save_map = false;              ///< write the kept map to map_file at the end (~save_map)
+  std::optional<ExtrinsicError> extrinsic_error;
 };
 
 /// Parses argv into *o (--help and usage errors exit, as every tool's).
@@ -79,7 +87,7 @@ void parseArguments(int argc, char** argv, Options* o) {
       "[--mechanization NAME|all] [--reference FILE.tum ...]\n"
       "       vi_ekf_slam_run_bag --bag FILE --recorded NAME=REC.bag [--recorded ...] [--out DIR]";
   po::options_description d("options");
-  std::string imu, image, info;
+  std::string imu, image, info, extrinsic_error;
   bool no_plots = false;
   d.add_options()("bag", po::value(&o->bag)->required(), "the input bag")(
       "out", po::value(&o->out), "output directory (default results/run_bag/<bag name>)")(
@@ -109,13 +117,38 @@ void parseArguments(int argc, char** argv, Options* o) {
       "reset-at", po::value(&o->reset_at_s)->composing(),
       "reset the filter (as the ~reset service does) this many seconds after the bag's start (repeatable)")(
       "save-map", po::bool_switch(&o->save_map),
-      "at the end, write the kept map to the map_file parameter (as ~save_map does; needs keep_map)");
+      "at the end, write the kept map to the map_file parameter (as ~save_map does; needs keep_map)")(
+      "extrinsic-error", po::value(&extrinsic_error),
+      "DEG,M[,TX,TY,TZ,MX,MY,MZ]: the filter is given the parameters' T_b_c turned by DEG degrees about T (body "
+      "frame; default x) and moved by M metres along M (default y); health.json says how far its estimate ends from "
+      "the parameters' (needs extrinsic_source parameters)");
   const po::variables_map vm = cli::parse(
       argc, argv, usage,
       "Runs the node's processor over a bag offline (deterministic, as fast as the CPU allows) and evaluates it.", d);
   if (vm.count("imu-topic")) o->imu_topic = imu;
   if (vm.count("image-topic")) o->image_topic = image;
   if (vm.count("camera-info-topic")) o->camera_info_topic = info;
+  if (vm.count("extrinsic-error")) {
+    std::vector<double> v;
+    std::stringstream ss(extrinsic_error);
+    for (std::string item; std::getline(ss, item, ',');) {
+      char* end = nullptr;
+      v.push_back(std::strtod(item.c_str(), &end));
+      if (item.empty() || *end != '\0' || !std::isfinite(v.back())) v.back() = std::nan("");
+    }
+    const bool finite = std::all_of(v.begin(), v.end(), [](double x) { return std::isfinite(x); });
+    if (!finite || (v.size() != 2 && v.size() != 8))
+      cli::fail(usage, "--extrinsic-error takes DEG,M or DEG,M,TX,TY,TZ,MX,MY,MZ");
+    ExtrinsicError e;
+    e.deg = v[0];
+    e.m = v[1];
+    if (v.size() == 8) {
+      e.turn = Vec3(v[2], v[3], v[4]);
+      e.move = Vec3(v[5], v[6], v[7]);
+    }
+    if (!(e.turn.norm() > 0.0) || !(e.move.norm() > 0.0)) cli::fail(usage, "--extrinsic-error: axes must not be zero");
+    o->extrinsic_error = e;
+  }
   o->plots = !no_plots;
   if (o->out.empty()) o->out = "results/run_bag/" + fs::path(o->bag).stem().string();
 }
@@ -162,7 +195,22 @@ std::string packageShare() {
   return share;
 }
 
-/// The node's parameters: --config, --rig over it, each --param, the mechanization.
+/// T_b_c (x y z qx qy qz qw) as the parameters hold it.
+CameraExtrinsics extrinsicOf(const std::vector<double>& v) {
+  CameraExtrinsics T;
+  T.p_b_c = Vec3(v[0], v[1], v[2]);
+  T.R_b_c = Quat(v[6], v[3], v[4], v[5]).normalized().toRotationMatrix();
+  return T;
+}
+
+/// How far apart two extrinsics are: rotation [deg] and translation [m].
+nlohmann::ordered_json extrinsicDistance(const CameraExtrinsics& a, const CameraExtrinsics& b) {
+  return {{"deg", rotationError(Quat(a.R_b_c), Quat(b.R_b_c)).norm() * 180.0 / M_PI},
+          {"m", (a.p_b_c - b.p_b_c).norm()}};
+}
+
+/// The node's parameters: --config, --rig over it, each --param, the mechanization (and, with
+/// --extrinsic-error, the wrong calibration the filter is given).
 glue::NodeParams nodeParams(const Options& o, const std::string& mechanization) {
   glue::YamlParams yaml(o.config);
   if (!o.rig.empty()) yaml.overlay(glue::YamlParams(glue::rigFile(o.rig, ros::package::getPath("vi_ekf_slam"))));
@@ -179,6 +227,16 @@ glue::NodeParams nodeParams(const Options& o, const std::string& mechanization) 
   // pose, and is marked in <run>_events.csv.
   params.node.publish_tf = glue::TfMode::kOdom;
   params.node.base_frame.clear();
+  if (o.extrinsic_error) {
+    if (params.node.extrinsic_source != "parameters")
+      throw std::runtime_error("--extrinsic-error needs extrinsic_source parameters (T_b_c in the rig file)");
+    const ExtrinsicError& e = *o.extrinsic_error;
+    CameraExtrinsics T = extrinsicOf(params.node.T_b_c);
+    T.R_b_c = expSO3(e.deg * M_PI / 180.0 * e.turn.normalized()) * T.R_b_c;
+    T.p_b_c += e.m * e.move.normalized();
+    const Quat q(T.R_b_c);
+    params.node.T_b_c = {T.p_b_c.x(), T.p_b_c.y(), T.p_b_c.z(), q.x(), q.y(), q.z(), q.w()};
+  }
   return params;
 }
 
@@ -334,6 +392,16 @@ void runOne(const Options& o, const std::string& mechanization, const glue::Inpu
   if (const EkfSlam* f = processor.filter(); f && params.filter.estimate_extrinsic) {
     h["extrinsic"] = extrinsicReport(*f);
     std::printf("  camera-IMU extrinsic estimated: %s\n", h["extrinsic"].dump().c_str());
+  }
+  if (o.extrinsic_error) {
+    // Against the parameters' own T_b_c (the calibration before the error): what was given, and
+    // where the estimate ended.
+    Options right = o;
+    right.extrinsic_error.reset();
+    const CameraExtrinsics calibration = extrinsicOf(nodeParams(right, mechanization).node.T_b_c);
+    h["extrinsic_error"] = {{"given", extrinsicDistance(extrinsicOf(params.node.T_b_c), calibration)}};
+    if (const EkfSlam* f = processor.filter(); f && params.filter.estimate_extrinsic)
+      h["extrinsic_error"]["final"] = extrinsicDistance(f->extrinsics(), calibration);
   }
   eval::writeTrace(o.out + "/" + name + "_trace.csv", sink.trace);
   std::cout << eval::healthLine(name, h);

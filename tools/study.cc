@@ -33,6 +33,7 @@
 
 #include "cli.h"
 #include "vi_ekf_slam/eval/report.h"
+#include "vi_ekf_slam/eval/report_columns.h"
 #include "vi_ekf_slam/eval/monte_carlo.h"
 #include "vi_ekf_slam/platform/allocator_tuning.h"
 #include "vi_ekf_slam/io/datasets.h"
@@ -587,22 +588,11 @@ eval::Report summaryReport(const Options& o, const std::string& traj_name, const
                            {"revisits_per_run", s.revisits_per_run},
                            {"false_revisits", s.false_revisits}};
   }
-  r.runs.columns = {{"ate_position_m", "ATE pos [m]", 3},
-                    {"ate_posyaw_m", "ATE posyaw [m]", 3},
-                    {"ate_orientation_deg", "ATE rot [deg]", 3},
-                    {"final_position_error_m", "final err [m]", 3},
-                    {"final_position_error_pct", "final err [%]", 2},
-                    {"nees_position", "NEES pos", 2},
-                    {"nees_orientation", "NEES rot", 2},
-                    {"nees_pose", "NEES pose", 2},
-                    {"consistent_fraction", "consistent", 2},
-                    {"revisit_error_ratio", "error on return / first", 2},
-                    {"revisits_per_run", "revisits / run", 1},
-                    {"false_revisits", "false revisits", 0},
-                    {"final_scale_ratio", "final gamma", 3},
-                    {"filter_ms_mean", "filter [ms]", 2},
-                    {"filter_ms_p95", "filter p95 [ms]", 2},
-                    {"real_time_factor", "real-time factor", 1}};
+  r.runs.columns =
+      eval::metricColumns({"ate_position_m", "ate_posyaw_m", "ate_orientation_deg", "final_position_error_m",
+                           "final_position_error_pct", "nees_position", "nees_orientation", "nees_pose",
+                           "consistent_fraction", "revisit_error_ratio", "revisits_per_run", "false_revisits",
+                           "final_scale_ratio", "filter_ms_mean", "filter_ms_p95", "real_time_factor"});
   std::ostringstream band;
   band << "Pose NEES 95% band for the run average: [" << std::fixed << std::setprecision(2) << sums[0].pose_band.lo
        << ", " << sums[0].pose_band.hi << "] (6 dof).";

@@ -36,6 +36,18 @@ double rms(const std::vector<double>& values) {
   return std::sqrt(s / static_cast<double>(values.size()));
 }
 
+double meanOfFinite(const std::vector<double>& values) {
+  double sum = 0.0;
+  int n = 0;
+  for (double x : values) {
+    if (std::isfinite(x)) {
+      sum += x;
+      ++n;
+    }
+  }
+  return n ? sum / n : std::nan("");
+}
+
 double scaleRatio(const std::vector<Vec3>& est, const std::vector<Vec3>& truth) {
   if (est.size() != truth.size()) throw std::invalid_argument("scaleRatio: size mismatch");
   double num = 0.0, den = 0.0;

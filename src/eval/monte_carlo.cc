@@ -246,17 +246,7 @@ ConsistencySummary summarize(const std::string& name, const std::vector<RunResul
       if (s.pose_band.contains(npose)) ++inside;
     }
   }
-  auto mean = [](const std::vector<double>& v) {
-    double acc = 0.0;
-    int n = 0;
-    for (double x : v) {
-      if (std::isfinite(x)) {
-        acc += x;
-        ++n;
-      }
-    }
-    return n ? acc / n : std::nan("");
-  };
+  const auto mean = meanOfFinite;
   s.nees_position = mean(s.avg_nees_p);
   s.nees_orientation = mean(s.avg_nees_q);
   s.nees_pose = mean(s.avg_nees_pose);

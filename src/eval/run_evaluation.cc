@@ -11,6 +11,7 @@
 
 #include "vi_ekf_slam/core/chi_squared.h"
 #include "vi_ekf_slam/eval/report.h"
+#include "vi_ekf_slam/eval/report_columns.h"
 #include "vi_ekf_slam/core/so3.h"
 
 namespace vi_ekf_slam::eval {
@@ -71,17 +72,7 @@ RunMetrics evaluateRun(const std::vector<EstimatedPose>& est, const std::vector<
     m.series.push_back(f);
   }
   if (m.series.empty()) return m;
-  auto mean = [](const std::vector<double>& v) {
-    double s = 0.0;
-    int n = 0;
-    for (double x : v) {
-      if (std::isfinite(x)) {
-        s += x;
-        ++n;
-      }
-    }
-    return n ? s / n : std::nan("");
-  };
+  const auto mean = meanOfFinite;
   m.frames = static_cast<int>(m.series.size());
   m.duration_s = m.series.back().t - m.series.front().t;
   m.distance_m = pathLength(p_true);
@@ -156,19 +147,10 @@ void writeRunReport(const std::string& dir, const std::vector<std::pair<std::str
                          {"tracker_ms_mean", m.tracker_ms_mean},
                          {"real_time_factor", m.real_time_factor}};
   }
-  r.runs.columns = {{"ate_position_m", "ATE [m]", 3},
-                    {"ate_posyaw_m", "ATE posyaw [m]", 3},
-                    {"ate_orientation_deg", "ATE rot [deg]", 3},
-                    {"final_position_error_m", "final err [m]", 3},
-                    {"final_position_error_pct", "final err [% of dist]", 2},
-                    {"nees_position", "NEES pos", 2},
-                    {"nees_orientation", "NEES rot", 2},
-                    {"nees_pose", "NEES pose", 2},
-                    {"final_scale_ratio", "gamma", 3},
-                    {"map_error_median_m", "map err median [m]", 3},
-                    {"processing_ms_mean", "ms/frame", 1},
-                    {"processing_ms_p95", "ms/frame p95", 1},
-                    {"real_time_factor", "real-time factor", 1}};
+  r.runs.columns =
+      metricColumns({"ate_position_m", "ate_posyaw_m", "ate_orientation_deg", "final_position_error_m",
+                     "final_position_error_pct", "nees_position", "nees_orientation", "nees_pose", "final_scale_ratio",
+                     "map_error_median_m", "processing_ms_mean", "processing_ms_p95", "real_time_factor"});
   writeReport(dir, "summary", r);
   for (const auto& [name, m] : runs) {
     std::ofstream ts(dir + "/" + name + "_timeseries.csv");

@@ -25,6 +25,7 @@
 #include <array>
 #include <cmath>
 #include <cstdio>
+#include <filesystem>
 #include <fstream>
 #include <iomanip>
 #include <sstream>
@@ -506,4 +507,45 @@ TEST(ToolsCli, RunBagWritesTheWholeRunAcrossResets) {
     ++segments;
   EXPECT_GE(segments, starts - 1);
   EXPECT_GE(segments, 2);
+}
+
+// run_bag --extrinsic-error gives the filter the parameters' extrinsic turned and moved by the
+// amounts asked, and says how far that and its estimate are from the parameters' own.
+TEST(ToolsCli, RunBagGivesTheFilterTheExtrinsicErrorAsked) {
+  const vi_ekf_slam::test::ScratchDir dir("vi_ekf_slam_extrinsic_error");
+  ASSERT_EQ(run(std::string(VI_TOOL_MAKE_BAG) + " --out " + dir / "walk.bag" + " --duration 4 --standing 1").code, 0);
+  const std::string base = std::string(VI_TOOL_RUN_BAG) + " --bag " + dir / "walk.bag" + " --out " + dir / "out" +
+                           " --no-plots --param extrinsic_source=parameters --param T_b_c=[0.1,0,0,-0.5,0.5,-0.5,0.5]"
+                           " --param estimate_extrinsic=true";
+  const Outcome o = run(base + " --extrinsic-error 3,0.03,0,0,1,1,-1,1");
+  ASSERT_EQ(o.code, 0) << o.output;
+  const nlohmann::json h =
+      nlohmann::json::parse(std::ifstream(dir / "out/health.json"))["runs"]["sensor_centric_composition"];
+  EXPECT_NEAR(h["extrinsic_error"]["given"]["deg"].get<double>(), 3.0, 1e-9) << h.dump();
+  EXPECT_NEAR(h["extrinsic_error"]["given"]["m"].get<double>(), 0.03, 1e-12) << h.dump();
+  EXPECT_TRUE(h["extrinsic_error"]["final"]["deg"].is_number()) << h.dump();
+  const Outcome bad = run(base + " --extrinsic-error 3");
+  EXPECT_EQ(bad.code, 2) << bad.output;
+}
+
+// The scripts' reports go through the C++ writer: a metric key gets the one header of
+// eval/report_columns.h, a script's own column its own; JSON and Markdown are written.
+TEST(ToolsCli, TheScriptsReportsAreWrittenByTheOneWriter) {
+  const vi_ekf_slam::test::ScratchDir dir("vi_ekf_slam_script_report");
+  const std::string script =
+      "import sys; sys.path.insert(0, '" + std::string(VI_EKF_SLAM_SOURCE_DIR) +
+      "/tools'); import report; "
+      "r = report.report('t', 'A title', {'seed': 1}, {'a': {'ate_position_m': 0.5, 'x': 2, 'n': float('nan')}}); "
+      "print(report.write_report('" +
+      dir.path() +
+      "', 'r', r, columns=['ate_position_m', ('x', 'my x', 0), "
+      "('n', 'n', 1)]))";
+  const Outcome o = run("env VI_EKF_SLAM_BIN=" + std::filesystem::path(VI_TOOL_RUN_BAG).parent_path().string() +
+                        " /usr/bin/python3 -c \"" + script + "\"");
+  ASSERT_EQ(o.code, 0) << o.output;
+  EXPECT_NE(o.output.find("| | ATE [m] | my x | n |"), std::string::npos) << o.output;
+  EXPECT_NE(o.output.find("| a | 0.500 | 2 | - |"), std::string::npos) << o.output;
+  const nlohmann::json j = nlohmann::json::parse(std::ifstream(dir / "r.json"));
+  EXPECT_EQ(j["schema"], "vi_ekf_slam.report/1");
+  EXPECT_TRUE(j["runs"]["a"]["n"].is_null());
 }

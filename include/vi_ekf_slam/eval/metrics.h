@@ -30,6 +30,8 @@ NeesBand neesBand(int dof, int runs, double prob = 0.95);
 /// Root mean square of the norms.
 double rms(const std::vector<Vec3>& errors);
 double rms(const std::vector<double>& values);
+/// The mean of the finite values (NaN when there is none).
+double meanOfFinite(const std::vector<double>& values);
 
 /// Scale ratio gamma (paper eq. 34): sum of pairwise distances of the estimated landmarks over
 /// the same sum for their true positions. NaN with fewer than two landmarks.
