@@ -16,8 +16,10 @@ NATIVE   ?= OFF
 export DATA_DIR
 DEVEL    := $(WS)/devel
 BIN      := $(DEVEL)/lib/vi_ekf_slam
-# The scripts write their reports with the built vi_ekf_slam_report (tools/report.py).
+# The scripts write their reports with the built vi_ekf_slam_report (tools/report.py), and every
+# report records the commit it was measured on (docs/results.md says it per section).
 export VI_EKF_SLAM_BIN := $(BIN)
+export VI_EKF_SLAM_COMMIT := $(shell git -C $(ROOT) rev-parse --short HEAD 2>/dev/null)$(shell git -C $(ROOT) diff --quiet HEAD -- src include tools config 2>/dev/null || echo +changes)
 CATKIN   := cd $(WS) && catkin_make -j$(JOBS) -DCMAKE_BUILD_TYPE=Release -DDATA_DIR=$(DATA_DIR) -DCMAKE_EXPORT_COMPILE_COMMANDS=ON -DVI_EKF_SLAM_NATIVE_ARCH=$(NATIVE)
 
 .PHONY: all deps workspace build test lint demo study suite initsuite bag screenshot bench soak realdata faults extrinsic params results rebuild-check clean help
@@ -55,7 +57,7 @@ help:
 	@echo "make faults - faulty copies of the real recording and the rendered walk, one fault class at a time -> results/faults"
 	@echo "make extrinsic - the online camera-IMU extrinsic from a calibration 3 deg / 3 cm off, real recording and study -> results/extrinsic"
 	@echo "make bench  - benchmarks (core vs map size, tracker, pipeline) -> results/bench/summary.json"
-	@echo "make soak   - 30 min endurance walk per mechanization (SOAK_MINUTES=, SOAK_MAP=keep) -> results/soak"
+	@echo "make soak   - 30 min endurance walk per mechanization (SOAK_MINUTES=, SOAK_MAP=keep) -> results/soak_forget, results/soak_keep"
 	@echo "make results - docs/results.md (and the README's quote) from the results of demo, realdata, suite, bench"
 	@echo "make lint   - catkin_lint, clang-format, pyflakes on the Python, clang-tidy on the core (part of make test)"
 	@echo "make clean  - remove the build workspace"
@@ -202,13 +204,18 @@ REAL      := $(DATA_DIR)/dmvio_handheld
 REAL_BAG  := results/bags/dmvio_handheld.bag
 REAL_REFS := --reference $(REAL)/reference/sfm_camera_poses.txt --reference-frame camera --reference-clock camera --reference-from-s 0 \
              --reference $(REAL)/reference/openvins_imu_poses.txt --reference-frame body --reference-clock imu --reference-from-s 0 \
-             --reference $(REAL)/reference/sfm_camera_poses.txt --reference-frame camera --reference-clock camera --reference-from-s 15
+             --reference $(REAL)/reference/sfm_camera_poses.txt --reference-frame camera --reference-clock camera --reference-from-s 15 \
+             --reference $(REAL)/reference/sfm_camera_poses.txt --reference-frame camera --reference-clock camera --reference-from-s 20
 $(REAL_BAG): $(BIN)/vi_ekf_slam_asl_to_bag
 	@mkdir -p $(dir $@)
 	$(BIN)/vi_ekf_slam_asl_to_bag --asl $(REAL)/mav0 --out $@
 realdata: build $(REAL_BAG)
 	source $(DEVEL)/setup.bash && $(BIN)/vi_ekf_slam_run_bag --bag $(REAL_BAG) --out results/realdata/defaults --mechanization all $(REAL_REFS)
 	source $(DEVEL)/setup.bash && $(BIN)/vi_ekf_slam_run_bag --bag $(REAL_BAG) --out results/realdata/rig --rig config/rigs/dmvio_handheld.yaml $(REAL_REFS)
+	@# The map kept (keep_map), with the defaults and the rig file, and across a reset forced at 30 s.
+	source $(DEVEL)/setup.bash && $(BIN)/vi_ekf_slam_run_bag --bag $(REAL_BAG) --out results/realdata/defaults_keep_map --param keep_map=true $(REAL_REFS)
+	source $(DEVEL)/setup.bash && $(BIN)/vi_ekf_slam_run_bag --bag $(REAL_BAG) --out results/realdata/rig_keep_map --rig config/rigs/dmvio_handheld.yaml --param keep_map=true $(REAL_REFS)
+	source $(DEVEL)/setup.bash && $(BIN)/vi_ekf_slam_run_bag --bag $(REAL_BAG) --out results/realdata/defaults_keep_map_reset_30s --param keep_map=true --reset-at 30 $(REAL_REFS)
 
 # Faults (docs/evaluation.md): faulty copies of the real hand-held recording and of the rendered
 # walk, one class at a time (clipped IMU samples, sensor gaps, a covered lens, NaN IMU samples, dim
@@ -228,8 +235,8 @@ extrinsic: build $(REAL_BAG)
 SOAK_MINUTES ?= 30
 SOAK_MAP ?= forget
 soak: build
-	$(BIN)/vi_ekf_slam_soak --minutes $(SOAK_MINUTES) --map $(SOAK_MAP) --out results/soak
-	python3 tools/plot_soak.py results/soak --docs docs/img
+	$(BIN)/vi_ekf_slam_soak --minutes $(SOAK_MINUTES) --map $(SOAK_MAP) --out results/soak_$(SOAK_MAP)
+	python3 tools/plot_soak.py results/soak_$(SOAK_MAP) $(if $(filter forget,$(SOAK_MAP)),--docs docs/img)
 
 clean:
 	rm -rf $(WS)

@@ -26,7 +26,10 @@ def load(path):
 
 
 def stamp(path):
-    return datetime.datetime.fromtimestamp(os.path.getmtime(path)).strftime("%Y-%m-%d %H:%M")
+    """When and on which commit the file's numbers were measured."""
+    when = datetime.datetime.fromtimestamp(os.path.getmtime(path)).strftime("%Y-%m-%d %H:%M")
+    commit = load(path).get("commit") if path.endswith(".json") else None
+    return "%s, commit %s" % (when, commit) if commit else "%s (no commit recorded)" % when
 
 
 def f(v, digits=3):
@@ -58,9 +61,14 @@ def demo_section(results):
     return glance, text
 
 
+REALDATA_RUNS = [("defaults", "defaults"), ("rig", "rig file"), ("defaults_keep_map", "defaults, map kept"),
+                 ("rig_keep_map", "rig file, map kept"),
+                 ("defaults_keep_map_reset_30s", "defaults, map kept, reset at 30 s")]
+
+
 def realdata_section(results):
     runs = []
-    for sub in ["defaults", "rig"]:
+    for sub, _ in REALDATA_RUNS:
         path = os.path.join(results, "realdata", sub, "health.json")
         if os.path.exists(path):
             for name, r in load(path)["runs"].items():
@@ -72,9 +80,9 @@ def realdata_section(results):
             "reference (camera poses) and OpenVINS tuned for the recording (IMU poses), Sim(3)-aligned; "
             "RMSE in the estimate's metres; `results/realdata/*/health.json`, %s. OpenVINS against the SfM "
             "reference: 0.073 m (the data set's README)." % stamp(runs[0][3]), "",
-            "| configuration | run | resets | SfM RMSE [m] | SfM from 15 s [m] | OpenVINS RMSE [m] | rotation vs SfM "
-            "[deg] | time offset [s] | real-time factor |",
-            "|---|---|---|---|---|---|---|---|---|"]
+            "| configuration | run | resets | SfM RMSE [m] | SfM from 15 s [m] | SfM from 20 s [m] | OpenVINS RMSE [m] "
+            "| rotation vs SfM [deg] | time offset [s] | relocalizations | real-time factor |",
+            "|---|---|---|---|---|---|---|---|---|---|---|"]
     headline = None
     for sub, name, r, _ in runs:
         refs = r.get("references", [])
@@ -84,12 +92,12 @@ def realdata_section(results):
                 if word in os.path.basename(x["file"]) and x.get("from_s") == from_s and "position_rmse_m" in x:
                     return x
             return None
-        sfm, sfm15, ov = ref("sfm"), ref("sfm", 15.0), ref("openvins")
-        text.append("| %s | %s | %d | %s | %s | %s | %s | %s | %.1f |" % (
-            "defaults" if sub == "defaults" else "rig file", name, r["resets"],
-            f(sfm and sfm["position_rmse_m"]), f(sfm15 and sfm15["position_rmse_m"]),
+        sfm, sfm15, sfm20, ov = ref("sfm"), ref("sfm", 15.0), ref("sfm", 20.0), ref("openvins")
+        text.append("| %s | %s | %d | %s | %s | %s | %s | %s | %s | %s | %.1f |" % (
+            dict(REALDATA_RUNS)[sub], name, r["resets"], f(sfm and sfm["position_rmse_m"]),
+            f(sfm15 and sfm15["position_rmse_m"]), f(sfm20 and sfm20["position_rmse_m"]),
             f(ov and ov["position_rmse_m"]), f(sfm and sfm["rotation_rmse_deg"], 2), f(r["time_offset_s"], 4),
-            r["real_time_factor"]))
+            r.get("relocalizations", "-"), r["real_time_factor"]))
         if sub == "defaults" and name == "sensor_centric_composition" and sfm:
             headline = (sfm["position_rmse_m"], r["time_offset_s"], r["resets"])
     return headline, text
@@ -182,6 +190,64 @@ def faults_section(results):
     return head, text
 
 
+def table_section(path, heading, about, columns):
+    """A generated section of a report's runs table (None when the file is not there): columns
+    [(key, header, digits)]."""
+    if not os.path.exists(path):
+        return []
+    r = load(path)
+    text = [heading, "", "%s `%s`, %s." % (about, os.path.relpath(path), stamp(path)), "",
+            "| | " + " | ".join(c[1] for c in columns) + " |", "|---|" + "---|" * len(columns)]
+    for name, row in r["runs"].items():
+        cells = []
+        for key, _, digits in columns:
+            v = row.get(key)
+            cells.append("-" if v is None else ("yes" if v is True else "no" if v is False else
+                                                ("%.*f" % (digits, v) if isinstance(v, float) else str(v))))
+        text.append("| %s | %s |" % (name, " | ".join(cells)))
+    for name, rows in r.get("tables", {}).items():
+        keys = [k for k in next(iter(rows.values()), {}).keys()]
+        text += ["", "| %s | %s |" % (name, " | ".join(keys)), "|---|" + "---|" * len(keys)]
+        for row_name, row in rows.items():
+            text.append("| %s | %s |" % (row_name, " | ".join(
+                "-" if row.get(k) is None else ("%.3f" % row[k] if isinstance(row[k], float) else str(row[k]))
+                for k in keys)))
+    return text
+
+
+def extra_sections(results):
+    """The map's walks, the online extrinsic and the soaks, where they were run."""
+    out = []
+    out += table_section(os.path.join(results, "suite", "map", "suite_map.json"), "## The map's walks (`make suite`)",
+                         "The study on walks that come back, every landmark unlike the others and on a tiled floor, the "
+                         "map kept and forgotten (the node's defaults otherwise);",
+                         [("ate_posyaw_keep_m", "ATE posyaw kept [m]", 3), ("ate_posyaw_forget_m", "forgotten [m]", 3),
+                          ("ate_keep_over_forget", "kept / forgotten", 2),
+                          ("return_keep", "error on return / first, kept", 2), ("return_forget", "forgotten", 2),
+                          ("revisits_per_run", "revisits / run", 1), ("false_revisits", "false revisits", 0),
+                          ("nees_pose_keep", "NEES pose kept", 2), ("consistent_keep", "consistent kept", 2),
+                          ("filter_ms_keep", "filter kept [ms]", 2), ("filter_ms_forget", "forgotten [ms]", 2)])
+    ext = table_section(os.path.join(results, "extrinsic", "extrinsic.json"),
+                        "## The online camera-IMU extrinsic (`make extrinsic`)",
+                        "The real recording from the rig file's extrinsic and four copies of it 3 deg / 3 cm off, fixed "
+                        "and estimated (Sim(3) against the SfM reference), and the study per start;",
+                        [("resets", "resets", 0), ("rmse_m", "RMSE [m]", 3), ("rotation_deg", "rotation [deg]", 2),
+                         ("given_off_deg", "given off [deg]", 2), ("given_off_cm", "given off [cm]", 1),
+                         ("final_off_deg", "final off [deg]", 2), ("final_off_cm", "final off [cm]", 1)])
+    out += ([""] if out and ext else []) + ext
+    for mode in ("forget", "keep"):
+        soak = table_section(os.path.join(results, "soak_" + mode, "summary.json"),
+                             "## Soak, the map %s (`make soak%s`)" % ("forgotten" if mode == "forget" else "kept",
+                                                                       "" if mode == "forget" else " SOAK_MAP=keep"),
+                             "Laps of the simulated walk for half an hour with the soak's faults, per mechanization;",
+                             [("distance_m", "distance [m]", 0), ("final_error_m", "final error [m]", 3),
+                              ("max_landmarks", "max landmarks", 0), ("rss_start_mb", "RSS start [MB]", 1),
+                              ("rss_end_mb", "RSS end [MB]", 1), ("nonfinite", "non-finite", 0),
+                              ("wall_s", "wall [s]", 0)])
+        out += ([""] if out and soak else []) + soak
+    return out
+
+
 def generate(results):
     demo_glance, demo = demo_section(results)
     real, realdata = realdata_section(results)
@@ -209,6 +275,8 @@ def generate(results):
             "Generated by `make results` (tools/results_page.py) from the result files named in each section; "
             "do not edit. Every current number of the project is here.", ""]
     page += glance + [""] + demo + [""] + realdata + [""] + suite + [""] + bench + ([""] + faults if faults else [])
+    extra = extra_sections(results)
+    page += [""] + extra if extra else []
     return "\n".join(page) + "\n"
 
 

@@ -24,6 +24,7 @@
 #include "vi_ekf_slam/platform/allocator_tuning.h"
 #include "vi_ekf_slam/sim/loop_walk.h"
 #include "vi_ekf_slam/eval/monte_carlo.h"
+#include "vi_ekf_slam/eval/report.h"
 
 using namespace vi_ekf_slam;
 namespace fs = std::filesystem;
@@ -106,9 +107,19 @@ int main(int argc, char** argv) {
   fs::create_directories(out);
   std::ofstream fault_csv(fs::path(out) / "faults.csv");
   fault_csv << "mechanization,fault,start_s,duration_s,error_before_m,error_10s_after_m\n";
-  std::ostringstream md;
-  md << "| mechanization | duration [min] | distance [m] | final error [m] | final error [%] | max landmarks | "
-        "RSS start [MB] | RSS end [MB] | non-finite | wall [s] |\n|---|---|---|---|---|---|---|---|---|---|\n";
+  eval::Report report;
+  report.tool = "soak";
+  report.title = "Soak: a " + std::to_string(static_cast<int>(minutes)) + "-minute walk of laps per mechanization";
+  report.config = {{"minutes", minutes}, {"map", map_arg}, {"faults", faults_arg}, {"seed", seed}};
+  report.runs.columns = {{"minutes", "duration [min]", 0},
+                         {"distance_m", "distance [m]", 0},
+                         {"final_error_m", "final error [m]", 3},
+                         {"final_error_pct", "final error [%]", 3},
+                         {"max_landmarks", "max landmarks", 0},
+                         {"rss_start_mb", "RSS start [MB]", 1},
+                         {"rss_end_mb", "RSS end [MB]", 1},
+                         {"nonfinite", "non-finite", 0},
+                         {"wall_s", "wall [s]", 0}};
   bool all_finite = true;
   for (Mechanization m : mechs) {
     EkfSlamConfig c;  // the node's defaults: composition every update, inverse depth, 100 landmarks
@@ -162,14 +173,20 @@ int main(int argc, char** argv) {
                 << "\n";
     }
     const double fin = rows.empty() ? std::nan("") : rows.back().err;
-    md << "| " << toString(m) << " | " << minutes << " | " << static_cast<int>(dist) << " | " << fin << " | "
-       << 100.0 * fin / std::max(1.0, dist) << " | " << max_lm << " | " << rss0 << " | "
-       << (rows.empty() ? rss0 : rows.back().rss) << " | " << nonfinite << " | " << static_cast<int>(wall) << " |\n";
+    report.runs.rows[toString(m)] = {{"minutes", minutes},
+                                     {"distance_m", dist},
+                                     {"final_error_m", fin},
+                                     {"final_error_pct", 100.0 * fin / std::max(1.0, dist)},
+                                     {"max_landmarks", max_lm},
+                                     {"rss_start_mb", rss0},
+                                     {"rss_end_mb", rows.empty() ? rss0 : rows.back().rss},
+                                     {"nonfinite", nonfinite},
+                                     {"wall_s", wall}};
     std::fprintf(stderr, "%s: %.0f m, final error %.2f m, RSS %.1f -> %.1f MB, %d non-finite, %.0f s\n",
                  toString(m).c_str(), dist, fin, rss0, rows.empty() ? rss0 : rows.back().rss, nonfinite, wall);
     all_finite = all_finite && nonfinite == 0;
   }
-  std::ofstream(fs::path(out) / "summary.md") << md.str();
-  std::cout << md.str() << "\nwritten to " << out << "\n";
+  eval::writeReport(out, "summary", report);
+  std::cout << eval::reportMarkdown(report) << "\nwritten to " << out << "\n";
   return all_finite ? 0 : 1;
 }

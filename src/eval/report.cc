@@ -2,6 +2,7 @@
 
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
 #include <filesystem>
 #include <fstream>
 #include <sstream>
@@ -66,6 +67,8 @@ nlohmann::ordered_json reportJson(const Report& r) {
   nlohmann::ordered_json js;
   js["schema"] = kReportSchema;
   js["tool"] = r.tool;
+  // The commit the numbers were measured on (make exports it; "+changes": with uncommitted ones).
+  if (const char* commit = std::getenv("VI_EKF_SLAM_COMMIT"); commit && *commit) js["commit"] = commit;
   js["title"] = r.title;
   js["config"] = r.config;
   js["runs"] = r.runs.rows;

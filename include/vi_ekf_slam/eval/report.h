@@ -1,8 +1,9 @@
 // The one report schema of the tools (run_bag's summary and health, the study, the suite, the
 // benchmarks; tools/report.py writes the same from Python). JSON:
-//   {"schema": "vi_ekf_slam.report/1", "tool": ..., "title": ..., "config": {settings},
+//   {"schema": "vi_ekf_slam.report/1", "tool": ..., ["commit": ...,] "title": ..., "config": {settings},
 //    "runs": {name: {metric: value}}, "tables": {name: {row: {column: value}}}}
-// ("tables" only when there are more tables than the runs), non-finite numbers as null; and the
+// ("tables" only when there are more tables than the runs; "commit" the environment's
+// VI_EKF_SLAM_COMMIT, the commit `make` measures on), non-finite numbers as null; and the
 // same as Markdown: the title, the settings, one table per table (a column per metric), notes.
 #pragma once
 
