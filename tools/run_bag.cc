@@ -73,6 +73,7 @@ struct Options {
   bool plots = true;
   bool segments = false;  ///< also each segment in the filter's own world
   std::vector<std::string> references, reference_alignment, reference_frame, reference_clock, reference_from_s;
+  double reference_window_s = 10.0;   ///< each reference also per window of this long, aligned on its own
   std::vector<std::string> recorded;  ///< NAME=BAG
   std::vector<std::string> params;    ///< name=value
   std::vector<double> reset_at_s;     ///< forced resets (the ~reset service), seconds after the bag's start
@@ -113,6 +114,9 @@ void parseArguments(int argc, char** argv, Options* o) {
       "imu | camera: the clock of the reference's stamps (default imu)")(
       "reference-from-s", po::value(&o->reference_from_s)->composing(),
       "compare only from this many seconds after the bag's start (default 0)")(
+      "reference-window-s", po::value(&o->reference_window_s)->default_value(10.0),
+      "also compare in consecutive windows of this many seconds, each aligned on its own: the scale per "
+      "window, and the first's over the later ones' median (0: not)")(
       "recorded", po::value(&o->recorded)->composing(), "NAME=REC.bag: a recording of a live replay (repeatable)")(
       "reset-at", po::value(&o->reset_at_s)->composing(),
       "reset the filter (as the ~reset service does) this many seconds after the bag's start (repeatable)")(
@@ -242,7 +246,7 @@ glue::NodeParams nodeParams(const Options& o, const std::string& mechanization) 
 
 /// One reference comparison of the run, printed, with its matched positions as CSV.
 nlohmann::ordered_json compareRun(const glue::RecordingSink& sink, const glue::InputBagInfo& info, const Reference& ref,
-                                  const std::string& csv) {
+                                  double window_s, const std::string& csv) {
   nlohmann::ordered_json j = {
       {"file", ref.path}, {"frame", ref.frame}, {"clock", ref.clock}, {"alignment", eval::toString(ref.alignment)}};
   if (sink.poses.empty()) {
@@ -274,6 +278,27 @@ nlohmann::ordered_json compareRun(const glue::RecordingSink& sink, const glue::I
         ref.path.c_str(), eval::toString(c.alignment).c_str(), ref.frame.c_str(), ref.clock.c_str(), from_text,
         c.matched, c.position_rmse_m, c.position_rmse_reference_units, c.rotation_rmse_deg, c.scale, c.estimate_path_m,
         c.reference_path_m);
+    // A scale that changes along the run (a start mapped at the wrong scale) shows per window.
+    const std::vector<eval::WindowComparison> windows = eval::compareInWindows(view, ref.poses, ref.alignment, window_s);
+    if (windows.size() >= 2) {
+      nlohmann::ordered_json w = nlohmann::ordered_json::array();
+      std::string scales;
+      for (const auto& x : windows) {
+        w.push_back({{"from_s", x.from_t - info.start},
+                     {"to_s", x.to_t - info.start},
+                     {"matched", x.comparison.matched},
+                     {"scale_reference_units_per_m", x.comparison.scale},
+                     {"position_rmse_m", x.comparison.position_rmse_m}});
+        char one[32];
+        std::snprintf(one, sizeof(one), "%s%.2f", scales.empty() ? "" : " ", x.comparison.scale);
+        scales += one;
+      }
+      j["window_s"] = window_s;
+      j["windows"] = w;
+      j["first_window_scale_ratio"] = eval::firstWindowScaleRatio(windows);
+      std::printf("    in windows of %g s, each aligned on its own: scale %s; the first over the later ones' median %.2f\n",
+                  window_s, scales.c_str(), eval::firstWindowScaleRatio(windows));
+    }
     std::ofstream rc(csv);
     rc << "t,ex,ey,ez,rx,ry,rz\n" << std::setprecision(12);
     for (size_t i = 0; i < c.t.size(); ++i) {
@@ -407,7 +432,7 @@ void runOne(const Options& o, const std::string& mechanization, const glue::Inpu
   std::cout << eval::healthLine(name, h);
   for (size_t k = 0; k < refs.size(); ++k) {
     const std::string csv = o.out + "/" + name + "_reference" + (k ? std::to_string(k + 1) : "") + ".csv";
-    h["references"].push_back(compareRun(sink, info, refs[k], csv));
+    h["references"].push_back(compareRun(sink, info, refs[k], o.reference_window_s, csv));
   }
   if (info.truth.empty()) return;
   std::vector<eval::EstimatedLandmark> lms;
@@ -452,10 +477,16 @@ void printReferenceComparisons(const eval::Report& health) {
       char from[48] = "";
       if (r.contains("from_s")) std::snprintf(from, sizeof(from), ", from %g s", r["from_s"].template get<double>());
       char line[200];
-      std::snprintf(line, sizeof(line), "%s, %d poses%s, %.3f m, %.2f deg\n",
+      std::snprintf(line, sizeof(line), "%s, %d poses%s, %.3f m, %.2f deg",
                     r.value("alignment", std::string()).c_str(), r.value("matched", 0), from,
                     r.value("position_rmse_m", 0.0), r.value("rotation_rmse_deg", 0.0));
       std::cout << line;
+      if (r.contains("first_window_scale_ratio") && r["first_window_scale_ratio"].is_number()) {
+        std::snprintf(line, sizeof(line), ", its first %g s window at %.2fx the later ones' scale",
+                      r["window_s"].template get<double>(), r["first_window_scale_ratio"].template get<double>());
+        std::cout << line;
+      }
+      std::cout << "\n";
     }
   }
 }

@@ -86,6 +86,7 @@ struct Options {
   bool list_configs = false;         // print the configurations and exit
   std::string imu_biases = "drawn";  // drawn | none: the simulated IMU's turn-on biases
   bool estimate_extrinsic = false;   // every configuration estimates the camera-IMU extrinsic
+  bool second_order = false;         // every composition keeps the second-order term (frame_change.h)
   std::string extrinsic_error;       // DEG,M: the filter is given an extrinsic this far off the true one
   std::string map;           // "keep" | "forget": landmarks whose tracks ended stay dormant or go; "": the core's
   int texture_patterns = 0;  // > 0: the world's appearance repeats N patterns (repeated texture)
@@ -140,7 +141,10 @@ Options parse(int argc, char** argv) {
       "write every run's errors and sigmas (runN.csv, landmarks_runN.csv), not only run 0's")(
       "landmark-entry", po::value(&o.landmark_entry),
       "triangulated | prior: new inverse-depth tracks wait for the baseline that triangulates them, or enter at the "
-      "prior depth at once (default: the core's)")("estimate-extrinsic", po::bool_switch(&o.estimate_extrinsic),
+      "prior depth at once (default: the core's)")("composition-second-order", po::bool_switch(&o.second_order),
+                                             "every composition keeps the second-order term of an inverse-depth "
+                                             "landmark's depth error times the pose error")(
+      "estimate-extrinsic", po::bool_switch(&o.estimate_extrinsic),
                                                    "every configuration estimates the camera-IMU extrinsic online")(
       "extrinsic-error", po::value(&o.extrinsic_error),
       "DEG,M: the filter is given the camera-IMU extrinsic turned by DEG degrees and moved by M metres (fixed "
@@ -240,6 +244,7 @@ EkfSlamConfig withStudyOptions(EkfSlamConfig c, const Options& o, const sim::Sce
   if (!o.imu.empty()) c.zero_velocity.velocity_sigma_mps = io::kEurocMavStandingVelocitySigma;
   if (o.gate > 0.0) c.update.gate_probability = o.gate;
   if (o.estimate_extrinsic) c.estimate_extrinsic = true;
+  if (o.second_order) c.composition_second_order = true;
   if (!o.map.empty()) c.map.within_run = o.map == "keep";
   return c;
 }

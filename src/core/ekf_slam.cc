@@ -164,7 +164,7 @@ FrameResult EkfSlam::processFrame(const CameraFrame& camera_frame) {
   if (shouldCompose(static_cast<int>(r.new_ids.size()))) {
     try {
       landmarks_.delayed().beforeComposition(state_);
-      compose(state_);
+      compose(state_, config_.composition_second_order);
       ++compositions_;
       r.composed = true;
     } catch (const std::runtime_error& e) {  // a diverged state the frame change cannot carry

@@ -1,5 +1,6 @@
 #include "vi_ekf_slam/core/frame_change.h"
 
+#include <cmath>
 #include <stdexcept>
 
 #include "vi_ekf_slam/core/matrix_utils.h"
@@ -181,9 +182,32 @@ FrameChangeJacobian compositionJacobian(const FilterState& s) {
   return J;
 }
 
-void compose(FilterState& s) {
+Mat3 compositionSecondOrderTerm(const FilterState& s, const FrameChangeJacobian& J, int i) {
+  const Landmark& lm = s.landmark(i);
+  if (lm.kind != LandmarkKind::kInverseDepth) return Mat3::Zero();
+  const Eigen::MatrixXd& P = s.covariance();
+  const int c = s.landmarkIndex(i);
+  const double rho = lm.l.z();
+  const double k = P(c + 2, c + 2) / (rho * rho);
+  if (!std::isfinite(k)) return Mat3::Zero();
+  Eigen::Matrix<double, 6, 6> P_pose;
+  P_pose << P.block<3, 3>(J.pos_col, J.pos_col), P.block<3, 3>(J.pos_col, J.rot_col),
+      P.block<3, 3>(J.rot_col, J.pos_col), P.block<3, 3>(J.rot_col, J.rot_col);
+  Eigen::Matrix<double, 3, 6> DA;
+  DA << J.A_pos[static_cast<size_t>(i)], J.A_rot[static_cast<size_t>(i)];
+  DA.row(2) *= 2.0;  // rho's row goes with rho^2
+  return k * DA * P_pose * DA.transpose();
+}
+
+void compose(FilterState& s, bool second_order) {
   const FrameChangeJacobian J = compositionJacobian(s);
   Eigen::MatrixXd Pn = applyFrameChange(s.covariance(), J);
+  if (second_order) {
+    for (int i = 0; i < s.numLandmarks(); ++i) {
+      const int c = s.landmarkIndex(i);
+      Pn.block<3, 3>(c, c) += compositionSecondOrderTerm(s, J, i);
+    }
+  }
   checkFinite(Pn);
   const Mat3 Rt = s.x.q_s_b.conjugate().toRotationMatrix();
   MotionState x = s.x;

@@ -110,4 +110,36 @@ ReferenceComparison compareWithReference(const std::vector<io::StampedPose>& est
   return out;
 }
 
+std::vector<WindowComparison> compareInWindows(const std::vector<io::StampedPose>& estimate,
+                                               const std::vector<io::StampedPose>& reference, Alignment alignment,
+                                               double window_s, double max_gap_s) {
+  std::vector<WindowComparison> out;
+  if (estimate.empty() || !(window_s > 0.0)) return out;
+  const double start = estimate.front().t;
+  size_t i = 0;
+  for (double from = start; i < estimate.size(); from += window_s) {
+    const double to = from + window_s;
+    std::vector<io::StampedPose> part;
+    for (; i < estimate.size() && estimate[i].t < to; ++i) part.push_back(estimate[i]);
+    try {
+      out.push_back({from, to, compareWithReference(part, reference, alignment, max_gap_s)});
+    } catch (const std::invalid_argument&) {
+      // fewer than three matches: no alignment to speak of
+    }
+  }
+  return out;
+}
+
+double firstWindowScaleRatio(const std::vector<WindowComparison>& windows) {
+  if (windows.size() < 2) return std::nan("");
+  std::vector<double> later;
+  for (size_t k = 1; k < windows.size(); ++k) later.push_back(windows[k].comparison.scale);
+  std::nth_element(later.begin(), later.begin() + static_cast<std::ptrdiff_t>(later.size() / 2), later.end());
+  double median = later[later.size() / 2];
+  if (later.size() % 2 == 0) {
+    median = 0.5 * (median + *std::max_element(later.begin(), later.begin() + static_cast<std::ptrdiff_t>(later.size() / 2)));
+  }
+  return windows.front().comparison.scale / median;
+}
+
 }  // namespace vi_ekf_slam::eval

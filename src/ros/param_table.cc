@@ -155,6 +155,9 @@ std::vector<ParamSpec> makeTable() {
                  {M::kWorldCentric, "strapdown in the navigation frame (paper)"},
                  {M::kSensorCentric, "strapdown in the body frame at start (paper)"},
                  {M::kSensorCentricComposition, "sensor-centric with the robocentric composition step (paper)"}}),
+      field("composition_second_order", "filter", VI_FIELD(p.filter.composition_second_order), "",
+            "the composition keeps the second-order term of an inverse-depth landmark's depth error times the "
+            "pose error (off: the paper's first order)"),
       choice("composition_trigger", "filter", VI_FIELD(p.filter.composition_trigger),
              "when the composition step runs (sensor_centric_composition only)", dyn,
              std::vector<std::pair<C, std::string>>{

@@ -1,5 +1,8 @@
 #include <gtest/gtest.h>
 
+#include <cmath>
+#include <random>
+
 #include "test_helpers.h"
 #include "vi_ekf_slam/core/frame_change.h"
 #include "vi_ekf_slam/core/navigation_output.h"
@@ -127,4 +130,49 @@ TEST(NavigationOutput, SensorCentricCovarianceMatchesNumericPropagation) {
       s0.dim());
   const Eigen::MatrixXd expected = J * s0.covariance() * J.transpose();
   EXPECT_LT(test::maxAbs(Eigen::MatrixXd(n0.cov) - expected), 1e-9);
+}
+
+// The composition's Jacobian moves an inverse-depth landmark's bearing with the pose error in
+// proportion to its inverse depth, taken at the estimate. With a depth known to 50% (a new point),
+// the product of the two errors is missing from the first order: the exact composition of states
+// drawn from the covariance spreads the bearing by (1 + (sigma_rho / rho)^2) times what the first
+// order says. The second-order term puts it back.
+TEST(Composition, SecondOrderTermIsTheSpreadThatAnUncertainDepthAdds) {
+  std::mt19937_64 rng(21);
+  FilterState s = test::randomState(Mechanization::kSensorCentricComposition, 2, rng);  // landmark 1: inverse depth
+  ASSERT_EQ(s.landmark(1).kind, LandmarkKind::kInverseDepth);
+  const int c = s.landmarkIndex(1);
+  const double rho = s.landmark(1).l.z();
+  // Independent errors: the position 0.1 m, the orientation 2 mrad, the bearing 1 mrad, rho 50%.
+  Eigen::MatrixXd P = 1e-10 * Eigen::MatrixXd::Identity(s.dim(), s.dim());
+  P.block<3, 3>(idx::kP, idx::kP) = 0.01 * Mat3::Identity();
+  P.block<3, 3>(idx::kPsi, idx::kPsi) = 4e-6 * Mat3::Identity();
+  P(c, c) = P(c + 1, c + 1) = 1e-6;
+  P(c + 2, c + 2) = std::pow(0.5 * rho, 2);
+  s.setCovariance(P);
+  FilterState first = s, second = s;
+  compose(first);
+  compose(second, true);
+  // The spread of the exact composition's bearing error over draws of the state's error.
+  const Eigen::MatrixXd L = P.llt().matrixL();
+  std::normal_distribution<double> n01;
+  const int draws = 20000;
+  Eigen::Matrix2d spread = Eigen::Matrix2d::Zero();
+  for (int k = 0; k < draws; ++k) {
+    Eigen::VectorXd z(s.dim());
+    for (int j = 0; j < s.dim(); ++j) z(j) = n01(rng);
+    FilterState x = s;
+    x.boxplus(L * z);
+    compose(x);
+    const Eigen::Vector2d e = x.boxminus(first).segment<2>(c);
+    spread += e * e.transpose() / draws;
+  }
+  const double sampled = spread.trace();
+  const double first_order = first.covariance().block<2, 2>(c, c).trace();
+  const double second_order = second.covariance().block<2, 2>(c, c).trace();
+  EXPECT_LT(first_order, 0.85 * sampled) << "first order " << first_order << ", sampled " << sampled;
+  EXPECT_NEAR(second_order / sampled, 1.0, 0.05) << "second order " << second_order << ", sampled " << sampled;
+  // Only inverse-depth landmarks get it, and a Cartesian one is left as it was.
+  const int c0 = s.landmarkIndex(0);
+  EXPECT_EQ(test::maxAbs(second.covariance().block<3, 3>(c0, c0) - first.covariance().block<3, 3>(c0, c0)), 0.0);
 }

@@ -6,6 +6,7 @@
 #include "scratch_dir.h"
 
 #include <Eigen/Geometry>
+#include <cmath>
 #include <fstream>
 #include <random>
 
@@ -94,4 +95,30 @@ TEST(ReferenceComparison, EurocGroundTruthCsvIsReadAsAReference) {
   // A comma-separated TUM file stays a TUM file.
   std::ofstream(path) << "10.0,1,2,3,0,0,0,1\n10.1,1,2,3,0,0,0,1\n";
   EXPECT_EQ(io::readTrajectoryFile(path).size(), 2u);
+}
+
+// A start mapped at the wrong scale: the estimate's first 10 s are 0.7 of the truth's size, the rest
+// is right. Each window is aligned on its own: the first shows 1/0.7 of the later windows' scale,
+// which the whole run's alignment averages away.
+TEST(ReferenceComparison, EachWindowIsAlignedOnItsOwnAndShowsItsScale) {
+  const auto truth = walk(600);  // 30 s
+  const Quat R(Eigen::AngleAxisd(0.7, Vec3(1.0, 0.3, -0.2).normalized()));
+  const auto ref = transformed(truth, 4.0, R, Vec3(-1.0, 2.0, 0.5));
+  auto est = truth;
+  for (auto& p : est)
+    if (p.t < truth.front().t + 10.0) p.p = 0.7 * p.p + Vec3(0.3, -0.2, 0.1);
+  const auto windows = eval::compareInWindows(est, ref, eval::Alignment::kSim3, 10.0);
+  ASSERT_EQ(windows.size(), 3u);
+  EXPECT_NEAR(windows[0].from_t, truth.front().t, 1e-12);
+  EXPECT_NEAR(windows[0].comparison.scale, 4.0 / 0.7, 1e-6);
+  EXPECT_NEAR(windows[1].comparison.scale, 4.0, 1e-6);
+  EXPECT_NEAR(windows[2].comparison.scale, 4.0, 1e-6);
+  EXPECT_LT(windows[0].comparison.position_rmse_m, 1e-6);
+  EXPECT_NEAR(eval::firstWindowScaleRatio(windows), 1.0 / 0.7, 1e-6);
+  const auto whole = eval::compareWithReference(est, ref, eval::Alignment::kSim3);
+  EXPECT_GT(whole.position_rmse_m, 0.01);  // one alignment cannot fit both sizes
+  // An estimate with less than a window gives one window, and no ratio.
+  const std::vector<io::StampedPose> short_est(est.begin(), est.begin() + 50);
+  EXPECT_EQ(eval::compareInWindows(short_est, ref, eval::Alignment::kSim3, 10.0).size(), 1u);
+  EXPECT_TRUE(std::isnan(eval::firstWindowScaleRatio(eval::compareInWindows(short_est, ref, eval::Alignment::kSim3, 10.0))));
 }

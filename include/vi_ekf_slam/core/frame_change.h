@@ -33,7 +33,18 @@ Eigen::MatrixXd denseJacobian(const FrameChangeJacobian& J, int num_landmarks);
 /// The composition step (eq. 31-33): the strapdown frame is reset to the current body frame.
 /// Only for sensor-centric states. Biases are untouched; p_n_s, q_n_s are composed (eq. 32).
 FrameChangeJacobian compositionJacobian(const FilterState& state);
-void compose(FilterState& state);
+/// second_order: the covariance keeps, for every inverse-depth landmark, the term of second order
+/// that the Jacobian leaves out (compositionSecondOrderTerm).
+void compose(FilterState& state, bool second_order = false);
+/// An inverse-depth landmark's parameters follow the pose error through the moved anchor by a
+/// Jacobian proportional to its inverse depth (rho for the bearing, rho^2 for rho itself), taken at
+/// the estimate. With rho itself uncertain, the product of its error and the pose error is a term
+/// the first order leaves out: its covariance, (sigma_rho / rho)^2 D A P_pose A^T D with
+/// D = diag(1, 1, 2) and A = [A_pos A_rot] (independent errors assumed), is what a new point's
+/// bearing is unsure of beyond the first order. Small once the depth is known; large for a point at
+/// its prior depth, whose updates otherwise make the velocity over-confident on a slow start.
+/// Landmark i's 3x3 term, for the Jacobian J of the composition of `state`.
+Mat3 compositionSecondOrderTerm(const FilterState& state, const FrameChangeJacobian& J, int i);
 
 /// Converts the state between world-centric and sensor-centric layouts, keeping the map and
 /// every navigation-frame quantity with its covariance. World -> sensor puts {s} at the current

@@ -47,4 +47,22 @@ ReferenceComparison compareWithReference(const std::vector<io::StampedPose>& est
                                          const std::vector<io::StampedPose>& reference, Alignment alignment,
                                          double max_gap_s = 0.5);
 
+/// One window of compareInWindows: its span on the estimate's clock and its own alignment.
+struct WindowComparison {
+  double from_t = 0.0, to_t = 0.0;  ///< [from_t, to_t) [s]
+  ReferenceComparison comparison;
+};
+
+/// The estimate cut into consecutive windows of window_s from its first stamp, each compared with
+/// the reference and aligned on its own. The whole run's alignment averages a scale that changes
+/// along the run (a start mapped at the wrong scale); each window's scale shows it. Windows with
+/// fewer than three matches are left out.
+std::vector<WindowComparison> compareInWindows(const std::vector<io::StampedPose>& estimate,
+                                               const std::vector<io::StampedPose>& reference, Alignment alignment,
+                                               double window_s, double max_gap_s = 0.5);
+
+/// The first window's scale over the median of the later windows' (1: the start's scale is the
+/// rest's; NaN with fewer than two windows).
+double firstWindowScaleRatio(const std::vector<WindowComparison>& windows);
+
 }  // namespace vi_ekf_slam::eval
