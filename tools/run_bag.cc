@@ -279,7 +279,8 @@ nlohmann::ordered_json compareRun(const glue::RecordingSink& sink, const glue::I
         c.matched, c.position_rmse_m, c.position_rmse_reference_units, c.rotation_rmse_deg, c.scale, c.estimate_path_m,
         c.reference_path_m);
     // A scale that changes along the run (a start mapped at the wrong scale) shows per window.
-    const std::vector<eval::WindowComparison> windows = eval::compareInWindows(view, ref.poses, ref.alignment, window_s);
+    const std::vector<eval::WindowComparison> windows =
+        eval::compareInWindows(view, ref.poses, ref.alignment, window_s);
     if (windows.size() >= 2) {
       nlohmann::ordered_json w = nlohmann::ordered_json::array();
       std::string scales;
@@ -296,8 +297,9 @@ nlohmann::ordered_json compareRun(const glue::RecordingSink& sink, const glue::I
       j["window_s"] = window_s;
       j["windows"] = w;
       j["first_window_scale_ratio"] = eval::firstWindowScaleRatio(windows);
-      std::printf("    in windows of %g s, each aligned on its own: scale %s; the first over the later ones' median %.2f\n",
-                  window_s, scales.c_str(), eval::firstWindowScaleRatio(windows));
+      std::printf(
+          "    in windows of %g s, each aligned on its own: scale %s; the first over the later ones' median %.2f\n",
+          window_s, scales.c_str(), eval::firstWindowScaleRatio(windows));
     }
     std::ofstream rc(csv);
     rc << "t,ex,ey,ez,rx,ry,rz\n" << std::setprecision(12);
@@ -477,9 +479,8 @@ void printReferenceComparisons(const eval::Report& health) {
       char from[48] = "";
       if (r.contains("from_s")) std::snprintf(from, sizeof(from), ", from %g s", r["from_s"].template get<double>());
       char line[200];
-      std::snprintf(line, sizeof(line), "%s, %d poses%s, %.3f m, %.2f deg",
-                    r.value("alignment", std::string()).c_str(), r.value("matched", 0), from,
-                    r.value("position_rmse_m", 0.0), r.value("rotation_rmse_deg", 0.0));
+      std::snprintf(line, sizeof(line), "%s, %d poses%s, %.3f m, %.2f deg", r.value("alignment", std::string()).c_str(),
+                    r.value("matched", 0), from, r.value("position_rmse_m", 0.0), r.value("rotation_rmse_deg", 0.0));
       std::cout << line;
       if (r.contains("first_window_scale_ratio") && r["first_window_scale_ratio"].is_number()) {
         std::snprintf(line, sizeof(line), ", its first %g s window at %.2fx the later ones' scale",

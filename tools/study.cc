@@ -142,10 +142,10 @@ Options parse(int argc, char** argv) {
       "landmark-entry", po::value(&o.landmark_entry),
       "triangulated | prior: new inverse-depth tracks wait for the baseline that triangulates them, or enter at the "
       "prior depth at once (default: the core's)")("composition-second-order", po::bool_switch(&o.second_order),
-                                             "every composition keeps the second-order term of an inverse-depth "
-                                             "landmark's depth error times the pose error")(
+                                                   "every composition keeps the second-order term of an inverse-depth "
+                                                   "landmark's depth error times the pose error")(
       "estimate-extrinsic", po::bool_switch(&o.estimate_extrinsic),
-                                                   "every configuration estimates the camera-IMU extrinsic online")(
+      "every configuration estimates the camera-IMU extrinsic online")(
       "extrinsic-error", po::value(&o.extrinsic_error),
       "DEG,M: the filter is given the camera-IMU extrinsic turned by DEG degrees and moved by M metres (fixed "
       "directions) from the true one")(

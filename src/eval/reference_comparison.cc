@@ -137,7 +137,8 @@ double firstWindowScaleRatio(const std::vector<WindowComparison>& windows) {
   std::nth_element(later.begin(), later.begin() + static_cast<std::ptrdiff_t>(later.size() / 2), later.end());
   double median = later[later.size() / 2];
   if (later.size() % 2 == 0) {
-    median = 0.5 * (median + *std::max_element(later.begin(), later.begin() + static_cast<std::ptrdiff_t>(later.size() / 2)));
+    median = 0.5 *
+             (median + *std::max_element(later.begin(), later.begin() + static_cast<std::ptrdiff_t>(later.size() / 2)));
   }
   return windows.front().comparison.scale / median;
 }

@@ -120,5 +120,6 @@ TEST(ReferenceComparison, EachWindowIsAlignedOnItsOwnAndShowsItsScale) {
   // An estimate with less than a window gives one window, and no ratio.
   const std::vector<io::StampedPose> short_est(est.begin(), est.begin() + 50);
   EXPECT_EQ(eval::compareInWindows(short_est, ref, eval::Alignment::kSim3, 10.0).size(), 1u);
-  EXPECT_TRUE(std::isnan(eval::firstWindowScaleRatio(eval::compareInWindows(short_est, ref, eval::Alignment::kSim3, 10.0))));
+  EXPECT_TRUE(
+      std::isnan(eval::firstWindowScaleRatio(eval::compareInWindows(short_est, ref, eval::Alignment::kSim3, 10.0))));
 }
