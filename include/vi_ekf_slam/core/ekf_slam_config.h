@@ -68,7 +68,7 @@ struct EkfSlamConfig {
   /// The composition keeps the second-order term of an inverse-depth landmark's depth error times
   /// the pose error (compositionSecondOrderTerm in frame_change.h). Off: the paper's first order.
   /// In the simulator it brings the slow start (crawl) into the NEES band and changes nothing
-  /// elsewhere; on the real hand-held recording it is worse (docs/results.md), so it is off.
+  /// elsewhere; on the real hand-held recording it is worse, so it is off.
   bool composition_second_order = false;
   ImuNoiseParams imu_noise;
   double gravity_mps2 = 9.81;  ///< local gravity magnitude [m/s^2]
