@@ -21,7 +21,7 @@ namespace vi_ekf_slam::sim {
 using namespace eval;  // the Monte-Carlo runs (eval/monte_carlo.h)
 namespace {
 
-constexpr int kRuns = 3;
+constexpr int kRelocalizationRuns = 3;
 /// Into the way back (the U-turn is near 28 s of the walk, 14 s into the cut) [s after its start].
 constexpr double kResetAfterS = 24.0;
 
@@ -76,11 +76,11 @@ ResetOutcome resetRun(Scenario sc, bool relocalize, std::uint64_t seed) {
 TEST(Relocalization, AResetInAMappedPlaceRejoinsTheOldMap) {
   const Scenario sc = corridorReturn(0);
   std::vector<std::future<ResetOutcome>> kept, forgot;
-  for (int r = 0; r < kRuns; ++r) {
+  for (int r = 0; r < kRelocalizationRuns; ++r) {
     kept.push_back(std::async(std::launch::async, [&sc, r] { return resetRun(sc, true, 5100 + r); }));
     forgot.push_back(std::async(std::launch::async, [&sc, r] { return resetRun(sc, false, 5100 + r); }));
   }
-  for (int r = 0; r < kRuns; ++r) {
+  for (int r = 0; r < kRelocalizationRuns; ++r) {
     const ResetOutcome k = kept[static_cast<size_t>(r)].get();
     const ResetOutcome f = forgot[static_cast<size_t>(r)].get();
     ASSERT_FALSE(std::isnan(k.restart_t));
