@@ -228,7 +228,8 @@ realdata: build $(REAL_BAG)
 # images, a lossy link), each through the node's processor; one table (results/faults/faults.md).
 faults: build $(REAL_BAG) $(BAG)
 	source $(DEVEL)/setup.bash && python3 tools/fault_matrix.py --bin $(BIN) --out results/faults \
-	  --bag real=$(REAL_BAG):$(REAL)/reference/sfm_camera_poses.txt --bag rendered=$(BAG) --study
+	  --bag real=$(REAL_BAG):$(REAL)/reference/sfm_camera_poses.txt --bag rendered=$(BAG) --study \
+	  --sizes covered_lens=4,6,10
 
 # The online camera-IMU extrinsic (docs/evaluation.md): the real recording from its rig file's
 # extrinsic and from four copies 3 deg / 3 cm off, fixed and estimated; the study per start.

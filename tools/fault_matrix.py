@@ -9,8 +9,12 @@ schema of tools/report.py) and prints the table.
 With --study, also the study on the built-in walk (8 runs, the default configuration) clean and with
 each of the simulator's faults: ATE, run-averaged pose NEES and its band.
 
+A fault of one moment (a covered lens, dim images) met at one moment is one sample: it is placed at
+each of --moments (fractions of the bag), one row per moment and a row with the worst of them
+(most resets, then the largest error). --sizes adds sizes of a class (covered_lens=4,6,10).
+
 usage: fault_matrix.py --bin DIR --bag NAME=BAG[:REFERENCE.tum] [--bag ...] [--out DIR] [--classes a,b|all]
-                       [--study]
+                       [--moments 0.2,0.4,0.6,0.8] [--sizes CLASS=S,S ...] [--study]
 """
 import argparse
 import os
@@ -71,29 +75,52 @@ def main():
     ap.add_argument("--out", default="results/faults")
     ap.add_argument("--classes", default="all")
     ap.add_argument("--keep-bags", action="store_true", help="keep the faulty copies (they are as large as the bag)")
+    ap.add_argument("--moments", default="0.2,0.4,0.6,0.8",
+                    help="where each fault of one moment is placed, fractions of the bag")
+    ap.add_argument("--sizes", action="append", default=[],
+                    help="CLASS=S,S,...: also these sizes of a class (its default size is always run)")
     ap.add_argument("--study", action="store_true", help="also the study with the simulator's faults")
     a = ap.parse_args()
-    every = subprocess.run([os.path.join(a.bin, "vi_ekf_slam_perturb_bag"), "--list-faults"], check=True,
-                           stdout=subprocess.PIPE, text=True).stdout.split()  # the names, written once in C++
+    tool = os.path.join(a.bin, "vi_ekf_slam_perturb_bag")
+
+    def names(option):  # written once in C++
+        return subprocess.run([tool, option], check=True, stdout=subprocess.PIPE, text=True).stdout.split()
+
+    every, of_one_moment = names("--list-faults"), names("--list-moment-faults")
     classes = every if a.classes == "all" else a.classes.split(",")
+    extra_sizes = {}
+    for spec in a.sizes:
+        c, _, sizes = spec.partition("=")
+        extra_sizes[c] = [float(x) for x in sizes.split(",")]
+    moments = [float(x) for x in a.moments.split(",")]
+    # (label, class, size or None for the default, moment or None for the class's own)
+    cases = []
+    for c in classes:
+        for size in [None] + extra_sizes.get(c, []):
+            label = c if size is None else "%s %gs" % (c, size)
+            for m in (moments if c in of_one_moment else [None]):
+                cases.append((label if m is None else "%s @%.2f" % (label, m), c, size, m))
     rows = {}
     for spec in a.bag:
         name, _, rest = spec.partition("=")
         bag, _, ref = rest.partition(":")
         clean_health, clean_error = run(a.bin, bag, ref, os.path.join(a.out, name, "clean"))
-        for fault in ["clean"] + classes:
+        for label, fault, size, moment in [("clean", "clean", None, None)] + cases:
             if fault == "clean":
                 health, error = clean_health, clean_error
             else:
-                faulty = os.path.join(a.out, name, fault + ".bag")
-                subprocess.run([os.path.join(a.bin, "vi_ekf_slam_perturb_bag"), "--bag", bag, "--out", faulty,
-                                "--fault", fault], check=True, stdout=subprocess.DEVNULL)
-                health, error = run(a.bin, faulty, ref, os.path.join(a.out, name, fault))
+                folder = label.replace(" ", "_").replace("@", "at")
+                faulty = os.path.join(a.out, name, folder + ".bag")
+                cmd = [tool, "--bag", bag, "--out", faulty, "--fault", fault]
+                cmd += ["--size", str(size)] if size is not None else []
+                cmd += ["--at", str(moment)] if moment is not None else []
+                subprocess.run(cmd, check=True, stdout=subprocess.DEVNULL)
+                health, error = run(a.bin, faulty, ref, os.path.join(a.out, name, folder))
                 if not a.keep_bags:
                     os.remove(faulty)
             inputs = health.get("inputs", {})
-            rows["%s / %s" % (name, fault)] = {
-                "bag": name, "fault": fault, "resets": health["resets"],
+            rows["%s / %s" % (name, label)] = {
+                "bag": name, "fault": label, "resets": health["resets"],
                 "output_s": health["output_s"], "input_s": health["input_s"],
                 "error_m": error, "error_over_clean": error / clean_error if error and clean_error else None,
                 "imu_bridged": inputs.get("imu_clipped", 0) + inputs.get("imu_implausible", 0),
@@ -102,10 +129,18 @@ def main():
                 "images_without_features": inputs.get("images_without_features", 0),
                 "divergences": inputs.get("divergences", 0),
             }
-            r = rows["%s / %s" % (name, fault)]
-            print("%-28s resets %d, output %.1f of %.1f s, error %s m" % (
-                name + " / " + fault, r["resets"], r["output_s"], r["input_s"],
+            r = rows["%s / %s" % (name, label)]
+            print("%-34s resets %d, output %.1f of %.1f s, error %s m" % (
+                name + " / " + label, r["resets"], r["output_s"], r["input_s"],
                 "%.3f" % error if error is not None else "-"), flush=True)
+        # The worst moment of each fault of one moment: most resets, then the largest error.
+        for label in dict.fromkeys(l.rpartition(" @")[0] for l, c, _, m in cases if m is not None):
+            at = [rows["%s / %s @%.2f" % (name, label, m)] for m in moments]
+            worst = dict(max(at, key=lambda r: (r["resets"], r["error_m"] if r["error_m"] is not None else 1e9)))
+            worst["fault"] = "%s, worst of %d moments" % (label, len(moments))
+            rows["%s / %s" % (name, worst["fault"])] = worst
+            print("%-34s resets %d, error %s m" % (name + " / " + worst["fault"], worst["resets"],
+                                                   "%.3f" % worst["error_m"] if worst["error_m"] is not None else "-"))
     tables = {"study": study_rows(a.bin, a.out)} if a.study else None
     r = report.report("faults", "Faults: one class at a time through the node's processor (%s)" % MECH,
                       {"mechanization": MECH, "classes": ",".join(classes)}, rows, tables)

@@ -1,7 +1,8 @@
 // Writes a faulty copy of a bag, one fault class at a time (ros/bag_faults.h): clipped IMU samples,
 // sensor gaps, a covered lens, NaN IMU samples, dim noisy images, a lossy link.
 //
-//   vi_ekf_slam_perturb_bag --bag IN --out OUT --fault CLASS [--size X] [--seed N]
+//   vi_ekf_slam_perturb_bag --bag IN --out OUT --fault CLASS [--size X] [--seed N] [--at F]
+#include <cmath>
 #include <cstdio>
 #include <iostream>
 
@@ -12,11 +13,12 @@ using namespace vi_ekf_slam;
 
 int main(int argc, char** argv) {
   std::string in, out, fault;
-  bool list = false;
+  bool list = false, list_moment = false;
   double size = 0.0;
   int seed = 1;
+  double at = std::nan("");  // unset
   const std::string usage =
-      "vi_ekf_slam_perturb_bag --bag IN --out OUT --fault CLASS [--size X] [--seed N] | --list-faults";
+      "vi_ekf_slam_perturb_bag --bag IN --out OUT --fault CLASS [--size X] [--seed N] [--at F] | --list-faults";
   std::string classes;
   for (auto c : glue::allFaultClasses()) {
     classes += (classes.empty() ? "" : " | ") + glue::toString(c) + " (" +
@@ -24,18 +26,24 @@ int main(int argc, char** argv) {
   }
   cli::po::options_description opts("options");
   opts.add_options()("list-faults", cli::po::bool_switch(&list), "print the fault classes, one a line, and exit")(
+      "list-moment-faults", cli::po::bool_switch(&list_moment),
+      "print the classes that act at one moment (--at places them), one a line, and exit")(
       "bag", cli::po::value(&in), "the input bag")("out", cli::po::value(&out), "the faulty copy to write")(
       "fault", cli::po::value(&fault), ("the fault class (default size): " + classes).c_str())(
       "size", cli::po::value(&size), "the fault's size: its period, length [s] or probability (see --help)")(
-      "seed", cli::po::value(&seed)->default_value(seed), "random seed");
+      "seed", cli::po::value(&seed)->default_value(seed), "random seed")(
+      "at", cli::po::value(&at),
+      "covered_lens, dim_images: where the fault starts, a fraction of the bag in [0, 1) (default: the class's own "
+      "moment, 0.5 and 0.3)");
   cli::parse(argc, argv, usage,
              "Writes a faulty copy of a bag: clipped_imu (a sample at the range every SIZE s), sensor_gaps (IMU gaps "
              "of SIZE s, image gaps of 6 SIZE s), covered_lens (black images for SIZE s), nan_imu (a NaN sample every "
              "SIZE s), dim_images (SIZE s of dim noisy images), lossy_link (images dropped with probability SIZE, "
              "duplicated, late).",
              opts);
-  if (list) {
-    for (auto c : glue::allFaultClasses()) std::printf("%s\n", glue::toString(c).c_str());
+  if (list || list_moment) {
+    for (auto c : glue::allFaultClasses())
+      if (list || glue::actsAtOneMoment(c)) std::printf("%s\n", glue::toString(c).c_str());
     return 0;
   }
   if (in.empty() || out.empty() || fault.empty()) cli::fail(usage, "--bag, --out and --fault are required");
@@ -45,6 +53,7 @@ int main(int argc, char** argv) {
   plan.fault = *c;
   plan.size = size > 0.0 ? size : glue::defaultFaultSize(*c);
   plan.seed = static_cast<std::uint64_t>(seed);
+  if (!std::isnan(at)) plan.at_fraction = at;
   try {
     const glue::FaultCounts n = glue::perturbBag(in, out, plan);
     std::printf(

@@ -74,10 +74,10 @@ Schedule scheduleOf(const FaultPlan& p, double start, double end, std::mt19937_6
       s.image_gaps = {at(0.4, 6.0 * p.size), at(0.8, 6.0 * p.size)};
       break;
     case FaultClass::kCoveredLens:
-      s.black = {at(0.5, p.size)};
+      s.black = {at(p.at_fraction.value_or(0.5), p.size)};
       break;
     case FaultClass::kDimImages:
-      s.dim = {at(0.3, p.size)};
+      s.dim = {at(p.at_fraction.value_or(0.3), p.size)};
       break;
     case FaultClass::kLossyLink:
       break;
@@ -107,6 +107,8 @@ std::vector<FaultClass> allFaultClasses() {
   return all;
 }
 
+bool actsAtOneMoment(FaultClass c) { return c == FaultClass::kCoveredLens || c == FaultClass::kDimImages; }
+
 double defaultFaultSize(FaultClass c) {
   switch (c) {
     case FaultClass::kClippedImu:
@@ -127,6 +129,11 @@ double defaultFaultSize(FaultClass c) {
 
 FaultCounts perturbBag(const std::string& in, const std::string& out, const FaultPlan& p) {
   if (!(p.size > 0.0)) throw std::runtime_error("the fault's size must be > 0");
+  if (p.at_fraction) {
+    if (!actsAtOneMoment(p.fault))
+      throw std::runtime_error("a moment (at) is for the faults of one moment: covered_lens, dim_images");
+    if (!(*p.at_fraction >= 0.0 && *p.at_fraction < 1.0)) throw std::runtime_error("the moment (at) must be in [0, 1)");
+  }
   const InputTopics topics = chooseInputTopics(in, std::nullopt, std::nullopt, std::nullopt);
   rosbag::Bag src(in, rosbag::bagmode::Read);
   rosbag::View view(src);

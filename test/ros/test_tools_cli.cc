@@ -438,6 +438,28 @@ TEST(ToolsCli, PerturbBagWritesEachFaultClassAsItsSizeSays) {
   const BagCounts covered = perturbed("covered_lens", 1.0);
   EXPECT_NEAR(covered.black, 28, 2);
   EXPECT_EQ(covered.images, clean.images);
+  // A fault of one moment placed elsewhere (the fault matrix places it at several): black from
+  // 20% of the bag on, for the same length.
+  vi_ekf_slam::glue::FaultPlan early;
+  early.fault = vi_ekf_slam::glue::FaultClass::kCoveredLens;
+  early.size = 1.0;
+  early.at_fraction = 0.2;
+  const auto early_counts = vi_ekf_slam::glue::perturbBag(dir + "/in.bag", dir + "/early.bag", early);
+  const auto middle_counts = vi_ekf_slam::glue::perturbBag(dir + "/in.bag", dir + "/middle.bag", [] {
+    vi_ekf_slam::glue::FaultPlan p;
+    p.fault = vi_ekf_slam::glue::FaultClass::kCoveredLens;
+    p.size = 1.0;
+    return p;
+  }());
+  ASSERT_EQ(early_counts.intervals.size(), 1u);
+  ASSERT_EQ(middle_counts.intervals.size(), 1u);
+  // The bag spans about 10 s: 0.5 - 0.2 of it is about 3 s earlier.
+  EXPECT_NEAR(middle_counts.intervals[0].first - early_counts.intervals[0].first, 3.0, 0.2);
+  EXPECT_NEAR(early_counts.images_black, 28, 2);
+  const Outcome misplaced = run(std::string(VI_TOOL_PERTURB_BAG) + " --bag " + dir + "/in.bag --out " + dir +
+                                "/x.bag --fault nan_imu --at 0.2");
+  EXPECT_EQ(misplaced.code, 1) << misplaced.output;
+  EXPECT_NE(misplaced.output.find("one moment"), std::string::npos) << misplaced.output;
   const BagCounts nan = perturbed("nan_imu", 3.0);
   EXPECT_GE(nan.imu_nan, 2);
   const BagCounts lossy = perturbed("lossy_link", 0.2);
@@ -448,6 +470,8 @@ TEST(ToolsCli, PerturbBagWritesEachFaultClassAsItsSizeSays) {
   EXPECT_EQ(list.code, 0) << list.output;
   EXPECT_EQ(std::count(list.output.begin(), list.output.end(), '\n'), 6) << list.output;
   EXPECT_NE(list.output.find("lossy_link\n"), std::string::npos) << list.output;
+  const Outcome moments = run(std::string(VI_TOOL_PERTURB_BAG) + " --list-moment-faults");
+  EXPECT_EQ(moments.output, "covered_lens\ndim_images\n");
   const Outcome unknown =
       run(std::string(VI_TOOL_PERTURB_BAG) + " --bag " + dir + "/in.bag --out " + dir + "/x.bag --fault glove");
   EXPECT_EQ(unknown.code, 2) << unknown.output;
