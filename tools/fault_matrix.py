@@ -95,11 +95,14 @@ def main():
     moments = [float(x) for x in a.moments.split(",")]
     # (label, class, size or None for the default, moment or None for the class's own)
     cases = []
+    placed = {}  # a fault of one moment (its label without the moment): the labels of its moments
     for c in classes:
         for size in [None] + extra_sizes.get(c, []):
             label = c if size is None else "%s %gs" % (c, size)
             for m in (moments if c in of_one_moment else [None]):
                 cases.append((label if m is None else "%s @%.2f" % (label, m), c, size, m))
+                if m is not None:
+                    placed.setdefault(label, []).append(cases[-1][0])
     rows = {}
     for spec in a.bag:
         name, _, rest = spec.partition("=")
@@ -134,10 +137,10 @@ def main():
                 name + " / " + label, r["resets"], r["output_s"], r["input_s"],
                 "%.3f" % error if error is not None else "-"), flush=True)
         # The worst moment of each fault of one moment: most resets, then the largest error.
-        for label in dict.fromkeys(l.rpartition(" @")[0] for l, c, _, m in cases if m is not None):
-            at = [rows["%s / %s @%.2f" % (name, label, m)] for m in moments]
+        for label, at_labels in placed.items():
+            at = [rows["%s / %s" % (name, x)] for x in at_labels]
             worst = dict(max(at, key=lambda r: (r["resets"], r["error_m"] if r["error_m"] is not None else 1e9)))
-            worst["fault"] = "%s, worst of %d moments" % (label, len(moments))
+            worst["fault"] = "%s, worst of %d moments" % (label, len(at))
             rows["%s / %s" % (name, worst["fault"])] = worst
             print("%-34s resets %d, error %s m" % (name + " / " + worst["fault"], worst["resets"],
                                                    "%.3f" % worst["error_m"] if worst["error_m"] is not None else "-"))
