@@ -88,8 +88,9 @@ struct Options {
   bool estimate_extrinsic = false;   // every configuration estimates the camera-IMU extrinsic
   bool second_order = false;         // every composition keeps the second-order term (frame_change.h)
   std::string extrinsic_error;       // DEG,M: the filter is given an extrinsic this far off the true one
-  std::string map;           // "keep" | "forget": landmarks whose tracks ended stay dormant or go; "": the core's
-  int texture_patterns = 0;  // > 0: the world's appearance repeats N patterns (repeated texture)
+  std::string map;               // "keep" | "forget": landmarks whose tracks ended stay dormant or go; "": the core's
+  std::string dormant_consider;  // "yes" | "no": dormant landmarks are consider states; "": the core's
+  int texture_patterns = 0;      // > 0: the world's appearance repeats N patterns (repeated texture)
 };
 
 const char* const kUsage =
@@ -152,6 +153,9 @@ Options parse(int argc, char** argv) {
       "map", po::value(&o.map),
       "keep | forget: landmarks whose tracks ended stay in the state as dormant and are found again by their "
       "appearance, or are marginalized (every configuration; default: the core's)")(
+      "dormant-consider", po::value(&o.dormant_consider),
+      "yes | no: dormant landmarks are consider states (Schmidt-Kalman: no update sharpens them) or ordinary "
+      "ones (every configuration; default: the core's)")(
       "texture-patterns", po::value(&o.texture_patterns)->default_value(o.texture_patterns),
       "N > 0: repeated texture, the landmarks' appearance repeats N patterns over the world (0: all differ)")(
       "fault", po::value(&o.faults)->composing(),
@@ -209,6 +213,9 @@ Options parse(int argc, char** argv) {
     usage("--landmark-entry must be triangulated or prior");
   }
   if (!o.map.empty() && o.map != "keep" && o.map != "forget") usage("--map must be keep or forget");
+  if (!o.dormant_consider.empty() && o.dormant_consider != "yes" && o.dormant_consider != "no") {
+    usage("--dormant-consider must be yes or no");
+  }
   if (o.texture_patterns < 0) usage("--texture-patterns must be >= 0");
   if (!o.depth_prior.empty() && o.depth_prior != "fixed" && o.depth_prior != "scene") {
     usage("--depth-prior must be fixed or scene");
@@ -246,6 +253,7 @@ EkfSlamConfig withStudyOptions(EkfSlamConfig c, const Options& o, const sim::Sce
   if (o.estimate_extrinsic) c.estimate_extrinsic = true;
   if (o.second_order) c.composition_second_order = true;
   if (!o.map.empty()) c.map.within_run = o.map == "keep";
+  if (!o.dormant_consider.empty()) c.map.dormant_consider = o.dormant_consider == "yes";
   return c;
 }
 

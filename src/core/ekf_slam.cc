@@ -143,7 +143,7 @@ FrameResult EkfSlam::processFrame(const CameraFrame& camera_frame) {
   for (const auto& f : known) {
     if (refused.count(f.id)) continue;
     landmarks_.seen(f.id, frame.timestamp);
-    map_.observed(f.id);
+    map_.observed(state_, f.id);
   }
   if (LandmarkManager::triangulationActive(state_, config_)) {
     landmarks_.addDelayed(view(), map_, fresh, frame.timestamp, seen_moving_ || defer, defer, &r);

@@ -181,6 +181,8 @@ UpdateResult ekfUpdate(FilterState& state, const std::vector<FeatureObservation>
   Eigen::VectorXd r, d = Eigen::VectorXd::Zero(n);
   Eigen::LLT<Eigen::MatrixXd> llt;
   const int iterations = std::max(1, params.iterations);
+  // Consider landmarks (Landmark::consider) are never corrected: every iterate leaves them at x_0.
+  const std::vector<int> consider = state.considerEntries();
   // Step control: an iterate is kept only while the cost it minimizes, |d|^2_{P0^-1} +
   // |z - h(x0 [+] d)|^2_R, decreases (plain Gauss-Newton overshot and diverged on some walks).
   // Every iterate is d = P0 H^T lambda, so its prior term is lambda^T (S - R) lambda for the S of
@@ -241,7 +243,10 @@ UpdateResult ekfUpdate(FilterState& state, const std::vector<FeatureObservation>
       return result;
     }
     const Eigen::VectorXd lambda = llt.solve(r + Hd);
-    const Eigen::VectorXd d_next = PHt * lambda;  // = K (r + H d)
+    Eigen::VectorXd d_next = PHt * lambda;  // = K (r + H d)
+    zeroConsider(d_next, consider);
+    // (With consider landmarks this is the prior cost of the iterate before their entries were
+    // zeroed: an approximation of the step control, not of the update.)
     if (iterations > 1) prior_cost = lambda.dot(S * lambda) - r_var * lambda.squaredNorm();
     const double change = (d_next - d).lpNorm<Eigen::Infinity>();
     d = d_next;
@@ -257,7 +262,7 @@ UpdateResult ekfUpdate(FilterState& state, const std::vector<FeatureObservation>
   restorePrior();
 
   // 3) The covariance, once, with the last gain.
-  optimalGainCovarianceUpdate(P, PHt, llt);
+  optimalGainCovarianceUpdate(P, PHt, llt, consider);
   state.boxplus(d);
   return result;
 }

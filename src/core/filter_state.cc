@@ -172,6 +172,15 @@ void FilterState::flush() const {
   P_.bottomLeftCorner(nm, m) = cross.transpose();
 }
 
+std::vector<int> FilterState::considerEntries() const {
+  std::vector<int> out;
+  for (int i = 0; i < numLandmarks(); ++i) {
+    if (!landmark(i).consider) continue;
+    for (int k = 0; k < idx::kLandmarkDim; ++k) out.push_back(landmarkIndex(i) + k);
+  }
+  return out;
+}
+
 void FilterState::boxplus(const Eigen::VectorXd& dx) {
   if (dx.size() != dim()) throw std::invalid_argument("boxplus: wrong size");
   x.p_s_b += dx.segment<3>(idx::kP);

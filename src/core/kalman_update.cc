@@ -75,12 +75,20 @@ bool factorInnovation(const Eigen::MatrixXd& S, Eigen::LLT<Eigen::MatrixXd>* llt
   return llt->info() == Eigen::Success;
 }
 
-void optimalGainCovarianceUpdate(Eigen::MatrixXd& P, const Eigen::MatrixXd& PHt,
-                                 const Eigen::LLT<Eigen::MatrixXd>& llt) {
+void optimalGainCovarianceUpdate(Eigen::MatrixXd& P, const Eigen::MatrixXd& PHt, const Eigen::LLT<Eigen::MatrixXd>& llt,
+                                 const std::vector<int>& consider) {
+  // With K = [K_a; 0], (I-KH) P (I-KH)^T + K R K^T differs from P - A A^T only in the consider
+  // block, which keeps its prior (exactly: it is put back, not added back).
+  const Eigen::MatrixXd P_cc = P(consider, consider);
   // A^T = L^-1 (P H^T)^T, so A A^T = P H^T S^-1 H P.
   const Eigen::MatrixXd At = llt.matrixL().solve(PHt.transpose());
   P.selfadjointView<Eigen::Lower>().rankUpdate(At.transpose(), -1.0);
   P.triangularView<Eigen::StrictlyUpper>() = P.transpose();
+  P(consider, consider) = P_cc;
+}
+
+void zeroConsider(Eigen::VectorXd& dx, const std::vector<int>& consider) {
+  for (int k : consider) dx(k) = 0.0;
 }
 
 KalmanUpdateResult kalmanUpdate(FilterState& state, const std::vector<MeasurementRows>& rows, double gate_probability) {
@@ -96,8 +104,10 @@ KalmanUpdateResult kalmanUpdate(FilterState& state, const std::vector<Measuremen
   if (gate_probability > 0.0 && res.nis > chiSquaredQuantile(gate_probability, static_cast<double>(r.size()))) {
     return res;
   }
-  const Eigen::VectorXd dx = PHt * Sinv_r;
-  optimalGainCovarianceUpdate(state.mutableCovariance(), PHt, llt);
+  const std::vector<int> consider = state.considerEntries();
+  Eigen::VectorXd dx = PHt * Sinv_r;
+  zeroConsider(dx, consider);
+  optimalGainCovarianceUpdate(state.mutableCovariance(), PHt, llt, consider);
   state.boxplus(dx);
   res.applied = true;
   return res;

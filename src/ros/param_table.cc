@@ -241,6 +241,10 @@ std::vector<ParamSpec> makeTable() {
             "in this many images (the first included; 1: at once): a look-alike at another depth drifts off, but "
             "waiting also loses true revisits whose corners the tracker drops",
             dyn),
+      field("map_dormant_consider", "map", VI_FIELD(p.filter.map.dormant_consider), "",
+            "dormant landmarks are consider states (Schmidt-Kalman): while unobserved no update changes them, and "
+            "when seen again the first update corrects the pose by them without sharpening them",
+            dyn),
       field("map_dormant_spacing_m", "map", VI_FIELD(p.filter.map.dormant_spacing_m), "m",
             "dormant landmarks are counted in cells of this size; the fullest cell gives up its least certain first",
             dyn),

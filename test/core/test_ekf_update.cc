@@ -313,3 +313,33 @@ TEST(EkfUpdate, RollingShutterRowTimesAreCompensated) {
   EXPECT_LT(rb.nis_sum, 1e-3 * ra.nis_sum);
   EXPECT_LT(b.boxminus(s).norm(), 1e-2 * a.boxminus(s).norm());
 }
+
+TEST(EkfUpdate, AnObservedConsiderLandmarkCorrectsThePoseAndStaysAsItWas) {
+  // A dormant point seen again (map.dormant_consider): the update moves the pose by it, iterated
+  // or not, but neither its mean nor its own covariance.
+  std::mt19937_64 rng(21);
+  const CameraModel cam = test::paperCamera();
+  const CameraExtrinsics T = test::forwardCamera();
+  for (int iterations : {1, 3}) {
+    FilterState s = test::randomState(Mechanization::kSensorCentricComposition, 4, rng);
+    s.landmark(0).consider = true;
+    std::vector<FeatureObservation> obs = perfectObservations(s, cam, T);
+    ASSERT_EQ(obs.size(), 4u);
+    for (auto& o : obs) o.uv += Eigen::Vector2d(1.5, -1.0);  // the pose is off
+    const FilterState before = s;
+    const std::vector<int> c = s.considerEntries();
+    const Eigen::MatrixXd P0 = s.covariance();
+    UpdateParams p;
+    p.gate_probability = 0.9999;
+    p.iterations = iterations;
+    ASSERT_EQ(ekfUpdate(s, obs, cam, T, p).accepted, 4);
+    EXPECT_EQ(s.landmark(0).l, before.landmark(0).l);
+    EXPECT_EQ(s.covariance()(c, c), P0(c, c));
+    EXPECT_GT((s.x.p_s_b - before.x.p_s_b).norm() + (s.x.q_s_b.vec() - before.x.q_s_b.vec()).norm(), 1e-6);
+    // The others are corrected, and P stays symmetric positive semi-definite.
+    EXPECT_NE(s.landmark(1).l, before.landmark(1).l);
+    const Eigen::MatrixXd& P1 = s.covariance();
+    EXPECT_LT(test::maxAbs(P1 - P1.transpose()), 1e-15);
+    EXPECT_GT(Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd>(P1).eigenvalues().minCoeff(), -1e-12);
+  }
+}

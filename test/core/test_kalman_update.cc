@@ -148,3 +148,43 @@ TEST(KalmanUpdate, TheGateRefusesAnInnovationBeyondItsQuantileAndLeavesTheStateA
   EXPECT_EQ(s.x.v_s_b, before.x.v_s_b);
   EXPECT_EQ(s.x.q_s_b.coeffs(), before.x.q_s_b.coeffs());
 }
+
+TEST(KalmanUpdate, ConsiderLandmarksGetTheSchmidtKalmanUpdate) {
+  // Landmarks marked consider (the map's dormant points) correct the rest of the state through
+  // their cross-covariance but are never corrected themselves: the gain's rows of their entries
+  // are zero, their block of P stays, and P is the Joseph form of that gain, no smaller than the
+  // optimal update's.
+  std::mt19937_64 rng(15);
+  for (Mechanization m : {Mechanization::kWorldCentric, Mechanization::kSensorCentricComposition}) {
+    FilterState s = test::randomState(m, 3, rng);
+    s.landmark(1).consider = true;  // the feature observes it
+    s.landmark(2).consider = true;  // correlated with what is observed, not observed
+    const std::vector<int> consider = s.considerEntries();
+    ASSERT_EQ(consider.size(), 6u);
+    EXPECT_EQ(consider.front(), s.landmarkIndex(1));
+    const FilterState before = s;
+    const std::vector<MeasurementRows> rows = randomRows(s, rng, 0.1);
+    const Eigen::MatrixXd P = s.covariance();
+    const Eigen::MatrixXd H = denseJacobian(rows, s.dim());
+    const Eigen::MatrixXd R = noiseOf(rows);
+    const Eigen::MatrixXd S = H * P * H.transpose() + R;
+    const Eigen::MatrixXd K_opt = P * H.transpose() * S.inverse();
+    Eigen::MatrixXd K = K_opt;
+    for (int k : consider) K.row(k).setZero();
+    const Eigen::VectorXd r = stackedResidual(rows);
+    ASSERT_TRUE(kalmanUpdate(s, rows, 0.999).applied);
+    const Eigen::MatrixXd IKH = Eigen::MatrixXd::Identity(s.dim(), s.dim()) - K * H;
+    const Eigen::MatrixXd P_schmidt = IKH * P * IKH.transpose() + K * R * K.transpose();
+    EXPECT_LT((s.covariance() - P_schmidt).cwiseAbs().maxCoeff(), 1e-10);
+    EXPECT_LT((s.boxminus(before) - K * r).cwiseAbs().maxCoeff(), 1e-10);
+    for (int i : {1, 2}) EXPECT_EQ(s.landmark(i).l, before.landmark(i).l);
+    EXPECT_EQ(s.covariance()(consider, consider), P(consider, consider));
+    // The motion state is corrected (the consider points are information, not ignored) ...
+    EXPECT_GT((s.x.p_s_b - before.x.p_s_b).norm(), 0.0);
+    // ... and the covariance is honest about the gain it used: no smaller than the optimal one's.
+    const Eigen::MatrixXd P_opt = P - K_opt * H * P;
+    const Eigen::VectorXd eig = Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd>(s.covariance() - P_opt).eigenvalues();
+    EXPECT_GT(eig.minCoeff(), -1e-9 * P.cwiseAbs().maxCoeff());
+    EXPECT_GT(eig.maxCoeff(), 1e-9 * P.cwiseAbs().maxCoeff());
+  }
+}

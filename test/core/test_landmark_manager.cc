@@ -49,6 +49,38 @@ TEST(LandmarkManager, TheMapIsBoundedAndLandmarksNotSeenForTheTimeoutLeave) {
   EXPECT_FALSE(s.findLandmark(100));
 }
 
+TEST(LandmarkManager, WithDormantConsiderAPointLeavingTheTrackedMapIsAConsiderStateUntilSeenAgain) {
+  for (bool consider : {true, false}) {
+    EkfSlamConfig cfg;
+    cfg.landmark_timeout_s = 0.1;
+    cfg.mechanization = Mechanization::kSensorCentric;  // no delayed entry
+    cfg.map.within_run = true;
+    cfg.map.dormant_consider = consider;
+    const CameraModel camera = sim::paperCamera();
+    FilterState s = emptyState(cfg, sim::torsoCameraExtrinsics(), cfg.mechanization);
+    LandmarkManager m;
+    WithinRunMap map;
+    m.started(s, 0.0);
+    std::vector<std::int64_t> removed;
+    const FilterView f{s, camera, cfg};
+    std::vector<FeatureObservation> obs = tracks(0, 3);
+    for (auto& o : obs) o.descriptor = Descriptor{};
+    ASSERT_EQ(m.addNow(f, map, obs, 0.0, &removed).size(), 3u);
+    map.rememberAppearance(s, obs);
+    s.mutableCovariance() *= 1e-6;  // well mapped: a point the map keeps
+    m.seen(0, 0.15);
+    // 1 and 2 time out at 0.2 s and stay as dormant points.
+    m.addNow(f, map, tracks(100, 1), 0.2, &removed);
+    EXPECT_TRUE(removed.empty());
+    EXPECT_EQ(map.dormantCount(), 2);
+    for (std::int64_t id : {0, 1, 2}) EXPECT_EQ(s.landmark(*s.findLandmark(id)).consider, consider && id != 0);
+    EXPECT_EQ(s.considerEntries().size(), consider ? 6u : 0u);
+    map.observed(s, 1);  // seen again: an ordinary point from now on
+    EXPECT_FALSE(s.landmark(*s.findLandmark(1)).consider);
+    EXPECT_EQ(map.dormantCount(), 1);
+  }
+}
+
 TEST(LandmarkManager, NewTracksWaitForABaselineOnlyWithInverseDepthComposedAfterEveryUpdate) {
   EkfSlamConfig cfg;
   cfg.mechanization = Mechanization::kSensorCentricComposition;

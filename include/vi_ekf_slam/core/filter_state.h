@@ -66,6 +66,8 @@ class FilterState {
   /// Cartesian position in {s} of landmark i.
   Vec3 landmarkPosition(int i) const { return landmark(i).position(); }
   std::optional<int> findLandmark(std::int64_t id) const;
+  /// The error-state entries of the consider landmarks (Landmark::consider), ascending.
+  std::vector<int> considerEntries() const;
 
   /// Appends a landmark with its 3x3 covariance and its cross-covariance to the existing state
   /// (3 x dim(), in the current ordering).

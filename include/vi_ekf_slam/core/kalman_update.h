@@ -47,8 +47,13 @@ bool factorInnovation(const Eigen::MatrixXd& S, Eigen::LLT<Eigen::MatrixXd>* llt
 /// for that gain, in one symmetric rank-m product of which only the lower triangle is computed
 /// and mirrored (P stays exactly symmetric). O(n^2 m / 2), half the expanded Joseph form's
 /// O(n^2 m), which the state's size makes the update's largest cost once the map is kept.
-void optimalGainCovarianceUpdate(Eigen::MatrixXd& P, const Eigen::MatrixXd& PHt,
-                                 const Eigen::LLT<Eigen::MatrixXd>& llt);
+/// `consider` (ascending error-state entries, FilterState::considerEntries): those entries get a
+/// zero gain (Schmidt-Kalman), so their block of P stays as it was, and only their cross-covariance
+/// with the rest is updated; the result is the Joseph form of that sub-optimal gain, exactly.
+void optimalGainCovarianceUpdate(Eigen::MatrixXd& P, const Eigen::MatrixXd& PHt, const Eigen::LLT<Eigen::MatrixXd>& llt,
+                                 const std::vector<int>& consider = {});
+/// Zeroes a correction's consider entries (their gain is zero).
+void zeroConsider(Eigen::VectorXd& dx, const std::vector<int>& consider);
 
 struct KalmanUpdateResult {
   bool applied = false;
@@ -57,7 +62,7 @@ struct KalmanUpdateResult {
 
 /// The whole step for a measurement linear in the error state: NIS, the gate (chi-square of the
 /// stacked dimension at gate_probability; <= 0: none), gain, covariance update, and the correction
-/// applied to the state.
+/// applied to the state (none to its consider landmarks).
 KalmanUpdateResult kalmanUpdate(FilterState& state, const std::vector<MeasurementRows>& rows, double gate_probability);
 
 }  // namespace vi_ekf_slam

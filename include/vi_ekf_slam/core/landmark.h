@@ -26,6 +26,10 @@ struct Landmark {
   Vec3 l = Vec3::Zero();
   Vec3 p_s_a = Vec3::Zero();      ///< anchor origin in {s} (inverse depth only)
   Mat3 R_s_a = Mat3::Identity();  ///< anchor orientation in {s} (inverse depth only)
+  /// A consider state (Schmidt-Kalman): measurements correct the rest of the state through its
+  /// cross-covariance but never the point itself, whose mean and covariance they leave as they
+  /// were (kalman_update.h). The map's dormant points, with map.dormant_consider.
+  bool consider = false;
 
   static Landmark cartesian(const Vec3& p_s_l) {
     Landmark lm;

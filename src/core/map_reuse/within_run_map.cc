@@ -179,6 +179,11 @@ std::vector<RevisitMatch> WithinRunMap::settle(const std::vector<RevisitMatch>& 
   return accepted;
 }
 
+void WithinRunMap::observed(FilterState& state, std::int64_t landmark_id) {
+  dormant_.erase(landmark_id);
+  if (const auto i = state.findLandmark(landmark_id)) state.landmark(*i).consider = false;
+}
+
 std::pair<Vec3, double> WithinRunMap::positionVariance(const FilterState& state, int i) {
   Mat3 M;
   const Vec3 p = state.landmark(i).position(&M);
@@ -220,10 +225,12 @@ void WithinRunMap::retire(const FilterView& f, const std::vector<std::int64_t>& 
   const EkfSlamConfig& config = f.config;
   for (auto id : leaving) {
     const auto i = state.findLandmark(id);
-    if (config.map.within_run && descriptors_.count(id) && i && wellMapped(state, *i, config.map))
+    if (config.map.within_run && descriptors_.count(id) && i && wellMapped(state, *i, config.map)) {
       dormant_.insert(id);
-    else
+      f.state.landmark(*i).consider = config.map.dormant_consider;
+    } else {
       drop->push_back(id);
+    }
   }
   // Dormant points use the room the tracked ones leave in the map (max_landmarks bounds them all,
   // so the cost at the bound is the same), up to map.max_dormant.

@@ -26,6 +26,12 @@ struct MapReuseParams {
   /// as dormant and searched for: a point whose depth the images have not settled would be found
   /// again in the wrong place [ratio].
   double max_relative_sigma = 0.1;
+  /// Dormant points are consider states (Schmidt-Kalman, Landmark::consider): while unobserved,
+  /// the updates of the other points leave them as they were instead of sharpening them through
+  /// the pose they share (information the linearization invents over a long dormancy); seen
+  /// again, the first update corrects the pose by them, and from the next on they are points of
+  /// the filter again.
+  bool dormant_consider = false;
   /// Dormant points are counted in cells of this size: the cell with the most gives up its least
   /// certain point first, so the kept map covers every place walked [m].
   double dormant_spacing_m = 1.0;

@@ -61,8 +61,8 @@ class WithinRunMap {
   /// others are returned as accepted.
   std::vector<RevisitMatch> settle(const std::vector<RevisitMatch>& revisits, const UpdateResult& update,
                                    std::unordered_set<std::int64_t>* refused_landmarks, int* refused_count);
-  /// The landmark was observed: it is tracked again, no longer dormant.
-  void observed(std::int64_t landmark_id) { dormant_.erase(landmark_id); }
+  /// The landmark was observed: it is tracked again, no longer dormant (nor a consider state).
+  void observed(FilterState& state, std::int64_t landmark_id);
   /// Keeps the first descriptor of every observed landmark (what revisits match) and its latest
   /// view's (what the map kept across runs holds).
   void rememberAppearance(const FilterState& state, const std::vector<FeatureObservation>& observed);
