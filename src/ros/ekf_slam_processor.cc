@@ -3,6 +3,7 @@
 #include <chrono>
 #include <fstream>
 #include <ros/console.h>
+#include <iomanip>
 #include <sstream>
 #include <stdexcept>
 #include <tf2/exceptions.h>
@@ -340,7 +341,7 @@ CameraFrame EkfSlamProcessor::trackImage(PendingImage& img, const std::optional<
   return frame;
 }
 
-void EkfSlamProcessor::processed(const CameraFrame& frame, const FrameResult& r, EkfSlam& /*filter*/) {
+void EkfSlamProcessor::processed(const CameraFrame& frame, const FrameResult& r, EkfSlam& filter) {
   last_update_ms_ = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - frame_tic_).count();
   if (!r.processed) {
     reportProblem("frame not processed: " + r.error);
@@ -354,9 +355,18 @@ void EkfSlamProcessor::processed(const CameraFrame& frame, const FrameResult& r,
     reportProblem("no image for " + std::to_string(img.t - *last_processed_t_) + " s");
   }
   last_processed_t_ = img.t;
-  if (frame.features.empty()) {
-    ++counters_.images_without_features;
-    reportProblem("no features tracked in the image (camera covered or dark?)");
+  if (frame.features.empty()) ++counters_.images_without_features;
+  if (r.blind_since) {
+    const double t0 = *r.blind_since, blind_s = filter.state().timestamp - t0;
+    std::ostringstream w;
+    w << std::fixed << std::setprecision(2) << "blind since t = " << t0 << " (" << blind_s
+      << " s): no usable feature in the image (lens covered, dark?); propagating on the IMU, landmarks kept";
+    if (blind_s <= 0.0) event(w.str());
+    reportProblem(w.str());
+  } else if (r.blind_ended_after_s > 0.0) {
+    std::ostringstream w;
+    w << std::fixed << std::setprecision(2) << "sight back after " << r.blind_ended_after_s << " s blind";
+    event(w.str());
   }
   const int rejected = static_cast<int>(r.update.rejected_ids.size());
   if (rejected >= 5 && rejected > r.update.accepted) {

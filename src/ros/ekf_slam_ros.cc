@@ -1,6 +1,8 @@
 #include "vi_ekf_slam/ros/ekf_slam_ros.h"
 
 #include <cv_bridge/cv_bridge.h>
+#include <iomanip>
+#include <sstream>
 #include <std_msgs/String.h>
 #include <stdexcept>
 #include <tf2_eigen/tf2_eigen.h>
@@ -302,6 +304,11 @@ void EkfSlamRos::diagnoseFilter(diagnostic_updater::DiagnosticStatusWrapper& sta
                  processor_->lastLost().empty()
                      ? "not initialized (waiting for the camera and " + start + ")"
                      : "lost (" + processor_->lastLost() + "): reset, waiting for " + start + " to re-initialize");
+  } else if (const std::optional<double> blind = f->blindSince()) {
+    std::ostringstream w;
+    w << std::fixed << std::setprecision(2) << "blind for " << f->state().timestamp - *blind
+      << " s (no usable image feature): propagating on the IMU, landmarks kept";
+    stat.summary(DiagnosticStatus::WARN, w.str());
   } else {
     stat.summary(DiagnosticStatus::OK, "running");
   }

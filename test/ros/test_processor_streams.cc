@@ -6,6 +6,7 @@
 #include <tf2/buffer_core.h>
 
 #include <Eigen/Geometry>
+#include <algorithm>
 #include <functional>
 #include <map>
 
@@ -222,6 +223,20 @@ TEST(ProcessorStream, ACoveredCameraIsRiddenThrough) {
   const StreamRun r = runStream(rig("camera_covered", 10.0), testParams());
   check(r, {.max_final_error_m = 0.15});
   EXPECT_GT(r.counters.images_without_features, 0);
+  // It says it is blind (status, events) for no longer than the lens was covered (5 s), and that
+  // it sees again.
+  double max_blind_s = 0.0;
+  for (const auto& st : r.out.statuses) max_blind_s = std::max(max_blind_s, st.blind_s);
+  EXPECT_GT(max_blind_s, 1.0);
+  EXPECT_LE(max_blind_s, 5.0);
+  ASSERT_FALSE(r.out.statuses.empty());
+  EXPECT_EQ(r.out.statuses.back().blind_s, 0.0);
+  auto said = [&](const std::string& what) {
+    return std::count_if(r.out.events.begin(), r.out.events.end(),
+                         [&](const std::string& e) { return e.find(what) != std::string::npos; });
+  };
+  EXPECT_EQ(said("blind since"), 1);
+  EXPECT_EQ(said("sight back after"), 1);
   // The tracks that start while it walks (after the stand, after the cover) wait for their
   // baseline, and status says how many.
   int max_waiting = 0;

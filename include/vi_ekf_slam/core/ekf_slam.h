@@ -105,6 +105,9 @@ class EkfSlam {
   /// Zero-velocity updates applied since the start or the last reset (standing detected).
   int zeroVelocityUpdates() const { return zero_velocity_updates_; }
 
+  /// The first image of the current blind stretch (no usable feature) [s, IMU clock]; none while the camera sees.
+  std::optional<double> blindSince() const { return blind_since_; }
+
  private:
   // The steps of processFrame besides its parts' (imu_, landmarks_, map_), in order.
   /// Standing (no translation parallax): the zero-velocity update.
@@ -135,7 +138,8 @@ class EkfSlam {
   StationaryDetector stationary_;
   DivergenceMonitor divergence_;
   OutlierWatch outlier_watch_;
-  bool seen_moving_ = false;  ///< parallax reached moving_parallax_px since the last stand (or start)
+  bool seen_moving_ = false;           ///< parallax reached moving_parallax_px since the last stand (or start)
+  std::optional<double> blind_since_;  ///< the first image of the current blind stretch [s]
 };
 
 }  // namespace vi_ekf_slam

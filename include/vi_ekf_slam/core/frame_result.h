@@ -3,6 +3,7 @@
 #pragma once
 
 #include <cstdint>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -36,6 +37,11 @@ struct FrameResult {
   int deferred_features = 0;                ///< new tracks kept out of the map: rig neither seen moving nor at rest
   int waiting_features = 0;                 ///< new tracks waiting for the baseline that triangulates them
   std::string lost;  ///< non-empty: the filter is lost (DivergenceMonitor) and should be reset; why
+  /// A blind stretch (no usable feature in the image: a covered lens, darkness, smoke): the time
+  /// of its first image [s, IMU clock]. The filter propagates on the IMU and keeps its landmarks.
+  std::optional<double> blind_since;
+  /// The first image with features after a blind stretch: how long it lasted [s] (0: none ended).
+  double blind_ended_after_s = 0.0;
 };
 
 }  // namespace vi_ekf_slam
