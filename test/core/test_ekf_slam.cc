@@ -102,18 +102,25 @@ TEST(EkfSlam, BadImuSamplesAreDroppedAndFramesWaitForImu) {
   EXPECT_FALSE(f.processFrame(frame).processed);  // older than the state
 }
 
+namespace {
+/// Starts f at the origin, at rest, with IMU samples at rest up to until_s.
+void startAtRest(EkfSlam& f, double until_s) {
+  f.initialize(NavState());
+  ImuData d;
+  d.am = Vec3(0, 0, -9.81);
+  for (int k = 0; 0.005 * k <= until_s + 1e-9; ++k) {
+    d.timestamp = 0.005 * k;
+    f.addImu(d);
+  }
+}
+}  // namespace
+
 TEST(EkfSlam, MapIsBoundedAndStaleLandmarksAreRemoved) {
   EkfSlamConfig cfg;
   cfg.max_landmarks = 5;
   cfg.landmark_timeout_s = 0.1;
   EkfSlam f(cfg, sim::paperCamera(), sim::torsoCameraExtrinsics());
-  f.initialize(NavState());
-  ImuData d;
-  d.am = Vec3(0, 0, -9.81);
-  for (int k = 0; k <= 100; ++k) {
-    d.timestamp = 0.005 * k;
-    f.addImu(d);
-  }
+  startAtRest(f, 0.5);
   CameraFrame frame;
   frame.timestamp = 0.1;
   for (int i = 0; i < 8; ++i) frame.features.push_back({i, Eigen::Vector2d(100 + 50 * i, 200)});
@@ -136,13 +143,7 @@ TEST(EkfSlam, ABlindStretchIsSaidAndKeepsTheLandmarks) {
   cfg.max_landmarks = 5;
   cfg.landmark_timeout_s = 0.1;
   EkfSlam f(cfg, sim::paperCamera(), sim::torsoCameraExtrinsics());
-  f.initialize(NavState());
-  ImuData d;
-  d.am = Vec3(0, 0, -9.81);
-  for (int k = 0; k <= 400; ++k) {
-    d.timestamp = 0.005 * k;
-    f.addImu(d);
-  }
+  startAtRest(f, 2.0);
   CameraFrame frame;
   frame.timestamp = 0.1;
   for (int i = 0; i < 3; ++i) frame.features.push_back({i, Eigen::Vector2d(100 + 50 * i, 200)});

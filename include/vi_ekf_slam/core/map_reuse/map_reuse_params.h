@@ -31,7 +31,7 @@ struct MapReuseParams {
   /// the pose they share (information the linearization invents over a long dormancy); seen
   /// again, the first update corrects the pose by them, and from the next on they are points of
   /// the filter again.
-  bool dormant_consider = false;
+  bool dormant_consider = true;
   /// Dormant points are counted in cells of this size: the cell with the most gives up its least
   /// certain point first, so the kept map covers every place walked [m].
   double dormant_spacing_m = 1.0;
