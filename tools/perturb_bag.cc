@@ -33,8 +33,10 @@ int main(int argc, char** argv) {
       "size", cli::po::value(&size), "the fault's size: its period, length [s] or probability (see --help)")(
       "seed", cli::po::value(&seed)->default_value(seed), "random seed")(
       "at", cli::po::value(&at),
-      "covered_lens, dim_images: where the fault starts, a fraction of the bag in [0, 1) (default: the class's own "
-      "moment, 0.5 and 0.3)");
+      ("the faults of one moment: where the fault starts, a fraction of the bag in [0, 1) (default: the class's "
+       "own moment): " +
+       glue::momentFaultsList())
+          .c_str());
   cli::parse(argc, argv, usage,
              "Writes a faulty copy of a bag: clipped_imu (a sample at the range every SIZE s), sensor_gaps (IMU gaps "
              "of SIZE s, image gaps of 6 SIZE s), covered_lens (black images for SIZE s), nan_imu (a NaN sample every "

@@ -120,17 +120,16 @@ FrameResult EkfSlam::processFrame(const CameraFrame& camera_frame) {
     f.id = map_.landmarkOf(f.id);
     (state_.findLandmark(f.id) ? known : fresh).push_back(f);
   }
-  // A blind stretch is not a failure: the filter propagates on the IMU and keeps its landmarks
-  // (nothing is missed while nothing can be seen, so their timeouts wait); the first image with
-  // features ends it, and its tracks are new ones while the landmarks of before wait to be found
-  // again (keep_map) or time out.
+  // A blind stretch is not a failure: the filter propagates on the IMU and says since when. Its
+  // landmarks leave as their tracks end (landmark_timeout_s), with keep_map as dormant points that
+  // stay in the map to be found again. (Holding the tracked ones through the stretch was measured
+  // worse: new points entered tied to the stale map's depth, docs/evaluation.md.)
   const bool blind = known.empty() && fresh.empty() && pending.empty();
   if (blind) {
     if (!blind_since_) blind_since_ = frame.timestamp;
     r.blind_since = blind_since_;
   } else if (blind_since_) {
     r.blind_ended_after_s = frame.timestamp - *blind_since_;
-    landmarks_.blindFor(r.blind_ended_after_s);
     blind_since_.reset();
   }
   std::vector<RevisitMatch> revisits;
@@ -159,9 +158,7 @@ FrameResult EkfSlam::processFrame(const CameraFrame& camera_frame) {
     landmarks_.seen(f.id, frame.timestamp);
     map_.observed(state_, f.id);
   }
-  if (blind) {
-    // (No track starts or ends, no landmark leaves.)
-  } else if (LandmarkManager::triangulationActive(state_, config_)) {
+  if (LandmarkManager::triangulationActive(state_, config_)) {
     landmarks_.addDelayed(view(), map_, fresh, frame.timestamp, seen_moving_ || defer, defer, &r);
   } else {
     if (defer) {

@@ -7,6 +7,7 @@
 #include <random>
 #include <rosbag/bag.h>
 #include <rosbag/view.h>
+#include <sstream>
 #include <sensor_msgs/CompressedImage.h>
 #include <sensor_msgs/Image.h>
 #include <sensor_msgs/Imu.h>
@@ -74,10 +75,10 @@ Schedule scheduleOf(const FaultPlan& p, double start, double end, std::mt19937_6
       s.image_gaps = {at(0.4, 6.0 * p.size), at(0.8, 6.0 * p.size)};
       break;
     case FaultClass::kCoveredLens:
-      s.black = {at(p.at_fraction.value_or(0.5), p.size)};
+      s.black = {at(p.at_fraction.value_or(*ownMoment(p.fault)), p.size)};
       break;
     case FaultClass::kDimImages:
-      s.dim = {at(p.at_fraction.value_or(0.3), p.size)};
+      s.dim = {at(p.at_fraction.value_or(*ownMoment(p.fault)), p.size)};
       break;
     case FaultClass::kLossyLink:
       break;
@@ -107,7 +108,28 @@ std::vector<FaultClass> allFaultClasses() {
   return all;
 }
 
-bool actsAtOneMoment(FaultClass c) { return c == FaultClass::kCoveredLens || c == FaultClass::kDimImages; }
+std::optional<double> ownMoment(FaultClass c) {
+  switch (c) {
+    case FaultClass::kCoveredLens:
+      return 0.5;  // the middle
+    case FaultClass::kDimImages:
+      return 0.3;
+    default:
+      return std::nullopt;
+  }
+}
+
+bool actsAtOneMoment(FaultClass c) { return ownMoment(c).has_value(); }
+
+std::string momentFaultsList() {
+  std::ostringstream out;
+  for (FaultClass c : allFaultClasses()) {
+    if (!actsAtOneMoment(c)) continue;
+    if (out.tellp() > 0) out << ", ";
+    out << toString(c) << " (" << *ownMoment(c) << ")";
+  }
+  return out.str();
+}
 
 double defaultFaultSize(FaultClass c) {
   switch (c) {
@@ -131,7 +153,7 @@ FaultCounts perturbBag(const std::string& in, const std::string& out, const Faul
   if (!(p.size > 0.0)) throw std::runtime_error("the fault's size must be > 0");
   if (p.at_fraction) {
     if (!actsAtOneMoment(p.fault))
-      throw std::runtime_error("a moment (at) is for the faults of one moment: covered_lens, dim_images");
+      throw std::runtime_error("a moment (at) is for the faults of one moment: " + momentFaultsList());
     if (!(*p.at_fraction >= 0.0 && *p.at_fraction < 1.0)) throw std::runtime_error("the moment (at) must be in [0, 1)");
   }
   const InputTopics topics = chooseInputTopics(in, std::nullopt, std::nullopt, std::nullopt);

@@ -360,7 +360,7 @@ void EkfSlamProcessor::processed(const CameraFrame& frame, const FrameResult& r,
     const double t0 = *r.blind_since, blind_s = filter.state().timestamp - t0;
     std::ostringstream w;
     w << std::fixed << std::setprecision(2) << "blind since t = " << t0 << " (" << blind_s
-      << " s): no usable feature in the image (lens covered, dark?); propagating on the IMU, landmarks kept";
+      << " s): no usable feature in the image (lens covered, dark?); propagating on the IMU";
     if (blind_s <= 0.0) event(w.str());
     reportProblem(w.str());
   } else if (r.blind_ended_after_s > 0.0) {

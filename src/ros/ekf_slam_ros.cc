@@ -307,7 +307,7 @@ void EkfSlamRos::diagnoseFilter(diagnostic_updater::DiagnosticStatusWrapper& sta
   } else if (const std::optional<double> blind = f->blindSince()) {
     std::ostringstream w;
     w << std::fixed << std::setprecision(2) << "blind for " << f->state().timestamp - *blind
-      << " s (no usable image feature): propagating on the IMU, landmarks kept";
+      << " s (no usable image feature): propagating on the IMU";
     stat.summary(DiagnosticStatus::WARN, w.str());
   } else {
     stat.summary(DiagnosticStatus::OK, "running");

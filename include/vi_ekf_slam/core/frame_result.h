@@ -38,7 +38,7 @@ struct FrameResult {
   int waiting_features = 0;                 ///< new tracks waiting for the baseline that triangulates them
   std::string lost;  ///< non-empty: the filter is lost (DivergenceMonitor) and should be reset; why
   /// A blind stretch (no usable feature in the image: a covered lens, darkness, smoke): the time
-  /// of its first image [s, IMU clock]. The filter propagates on the IMU and keeps its landmarks.
+  /// of its first image [s, IMU clock]. The filter propagates on the IMU.
   std::optional<double> blind_since;
   /// The first image with features after a blind stretch: how long it lasted [s] (0: none ended).
   double blind_ended_after_s = 0.0;

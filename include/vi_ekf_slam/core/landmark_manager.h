@@ -23,11 +23,6 @@ class LandmarkManager {
   void started(const FilterState& state, double scene_depth_m);
   /// The landmark was observed at t.
   void seen(std::int64_t id, double t) { last_seen_[id] = t; }
-  /// Nothing could be seen for `seconds` (a blind stretch): no landmark missed a sighting in it,
-  /// so their timeouts run on from where the stretch began.
-  void blindFor(double seconds) {
-    for (auto& [id, t] : last_seen_) t += seconds;
-  }
 
   /// New tracks wait for a baseline (config.triangulation; inverse depth composed after every update).
   static bool triangulationActive(const FilterState& state, const EkfSlamConfig& config);

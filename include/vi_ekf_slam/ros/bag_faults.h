@@ -25,8 +25,13 @@ enum class FaultClass {
 std::optional<FaultClass> faultClassFromString(const std::string& s);
 std::string toString(FaultClass c);
 std::vector<FaultClass> allFaultClasses();
+/// Where a class that acts at one moment of the bag acts unless FaultPlan::at_fraction places it
+/// elsewhere, a fraction of the bag; none for a class that acts throughout.
+std::optional<double> ownMoment(FaultClass c);
 /// A class that acts at one moment of the bag (FaultPlan::at_fraction places it).
 bool actsAtOneMoment(FaultClass c);
+/// The classes that act at one moment with their own moments, "covered_lens (0.5), ...".
+std::string momentFaultsList();
 /// The size of a class as the tests and `make faults` use it by default (at least the sizes that
 /// reset the filter on the real recording before these faults were handled).
 double defaultFaultSize(FaultClass c);
@@ -35,8 +40,8 @@ struct FaultPlan {
   FaultClass fault = FaultClass::kClippedImu;
   double size = 0.0;  ///< see FaultClass [s, or a probability]
   std::uint64_t seed = 1;
-  /// Where a fault of one moment (covered_lens, dim_images) starts, as a fraction of the bag
-  /// [0, 1); unset: the class's own moment (the middle for covered_lens, 0.3 for dim_images).
+  /// Where a fault of one moment (actsAtOneMoment) starts, as a fraction of the bag [0, 1);
+  /// unset: the class's own moment (ownMoment).
   std::optional<double> at_fraction;
   /// The clipped value of an accelerometer and a gyro axis: the range the node assumes by default.
   double accel_range_mps2 = ImuCheckParams().accel_range_mps2;
