@@ -45,6 +45,7 @@ void EkfSlam::forgetRun() {
   outlier_watch_.reset();
   seen_moving_ = false;
   blind_since_.reset();
+  hold_new_landmarks_ = false;
 }
 
 void EkfSlam::initialize(const NavState& init) { initialize(init, config_.initial); }
@@ -126,7 +127,10 @@ FrameResult EkfSlam::processFrame(const CameraFrame& camera_frame) {
   // worse: new points entered tied to the stale map's depth, docs/evaluation.md.)
   const bool blind = known.empty() && fresh.empty() && pending.empty();
   if (blind) {
-    if (!blind_since_) blind_since_ = frame.timestamp;
+    if (!blind_since_) {
+      blind_since_ = frame.timestamp;
+      knowAccelBiasAsAtStart();
+    }
     r.blind_since = blind_since_;
   } else if (blind_since_) {
     r.blind_ended_after_s = frame.timestamp - *blind_since_;
@@ -140,6 +144,8 @@ FrameResult EkfSlam::processFrame(const CameraFrame& camera_frame) {
     for (RevisitMatch& m : map_.find(v, camera_frame, &fresh, &known)) revisits.push_back(m);
   }
   updateSeenMoving(r);
+  const int held = hold_new_landmarks_ ? static_cast<int>(fresh.size()) : 0;
+  if (hold_new_landmarks_) fresh.clear();  // their tracks go on and enter once released
   const bool defer =
       config_.zero_velocity.enabled && config_.zero_velocity.defer_landmarks && !seen_moving_ && !at_rest;
   UpdateParams update = config_.update;
@@ -167,6 +173,7 @@ FrameResult EkfSlam::processFrame(const CameraFrame& camera_frame) {
     }
     r.new_ids = landmarks_.addNow(view(), map_, fresh, frame.timestamp, &r.removed_ids);
   }
+  r.deferred_features += held;
   if (config_.map.within_run) {
     map_.rememberAppearance(state_, known);
     map_.rememberAppearance(state_, fresh);
@@ -203,6 +210,23 @@ void EkfSlam::detectStanding(const CameraFrame& frame, bool at_rest, FrameResult
   if (r->stationary.stationary)
     r->zero_velocity_applied = zeroVelocityUpdate(state_, config_.zero_velocity, at_rest).applied;
   if (r->zero_velocity_applied) ++zero_velocity_updates_;
+}
+
+void EkfSlam::knowAccelBiasAsAtStart() {
+  // While blind the accelerometer bias (and the tilt, whose error acts on the horizontal axes as a
+  // bias does) is all that bounds the velocity's drift. What the images taught the filter of it
+  // under weak motion is overconfident (a slow hand-held walk: the velocity ran 0.3 m/s off in 4 s
+  // with a sigma of 0.03), so from the stretch's start it is known no better than at the start: its
+  // variance is raised to the prior's, and the velocity's uncertainty grows with it honestly.
+  const double prior = config_.initial.accel_bias_mps2 * config_.initial.accel_bias_mps2;
+  Eigen::MatrixXd P = state_.covariance();
+  bool raised = false;
+  for (int i = idx::kBa; i < idx::kBa + 3; ++i) {
+    if (P(i, i) >= prior) continue;
+    P(i, i) = prior;  // adding to a diagonal entry keeps P positive definite
+    raised = true;
+  }
+  if (raised) state_.setCovariance(std::move(P));
 }
 
 void EkfSlam::updateSeenMoving(const FrameResult& r) {

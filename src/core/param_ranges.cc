@@ -75,6 +75,7 @@ const std::map<std::string, ParamRange>& table() {
       // initialization [s, m/s, rad, ratio, rad/s, m/s^2, count, m, px]
       {"dynamic_init_window_s", {0.2, 10.0}},
       {"dynamic_init_max_window_s", {0.2, 10.0}},
+      {"blind_reanchor_max_wait_s", {0.0, 30.0}},
       {"dynamic_init_min_frames", {3, 1000}},
       {"dynamic_init_min_observations", {3, 1000}},
       {"dynamic_init_min_features", {6, 10000}},

@@ -107,6 +107,8 @@ void VioPipeline::tryRelocalize(const CameraFrame& frame) {
 
 void VioPipeline::forgetStart() {
   attempt_.reset();  // waits for a worker still running (it works on its own copy)
+  comeback_.reset();
+  sight_back_t_.reset();
   static_init_.reset();
   at_rest_.reset();
   if (dynamic_init_) dynamic_init_->reset();
@@ -144,6 +146,7 @@ void VioPipeline::addImu(const ImuData& imu) {
   if (auto r = static_init_.addImu(imu)) at_rest_ = r;
   if (!filter_ || (!camera_running_ && !filter_->initialized())) return;
   if (!filter_->initialized()) dynamic_init_->addImu(imu);
+  if (comeback_) comeback_->addImu(imu);
   filter_->addImu(imu);
   takeFinishedAttempt();
   tryStatic(imu.timestamp);
@@ -304,6 +307,58 @@ void VioPipeline::process(QueuedFrame& f) {
     return;
   }
   prev_q_n_b_ = nav->q_n_b;
+  comeBack(features, r);
+}
+
+void VioPipeline::comeBack(const CameraFrame& frame, const FrameResult& r) {
+  if (params_.reanchor_max_wait_s <= 0.0) return;
+  if (r.blind_since) {
+    if (!comeback_) {
+      comeback_ = std::make_unique<DynamicInitializer>(params_.dynamic_init, filter_->camera(), filter_->extrinsics());
+      filter_->holdNewLandmarks(true);
+    }
+    return;
+  }
+  if (!comeback_) return;
+  const double t = filter_->state().timestamp;  // the frame on the IMU clock
+  std::ostringstream e;
+  e.precision(3);
+  if (!sight_back_t_) {
+    sight_back_t_ = t;
+    // Landmarks of the map seen again anchor the velocity themselves.
+    if (r.update.accepted > 0) {
+      e << "sight back with " << r.update.accepted << " observations of the map's landmarks: no re-anchor";
+      endComeBack(e.str());
+      return;
+    }
+  }
+  CameraFrame f = frame;
+  f.timestamp = t;
+  comeback_->addFrame(f);
+  std::string why;
+  const std::optional<DynamicInitResult> aligned = comeback_->tryInitialize(&why);
+  if (aligned) {
+    const Vec3 v_before = filter_->state().x.q_s_b.conjugate() * filter_->state().x.v_s_b;
+    const BodyVelocity m = bodyVelocityOf(*aligned);
+    const KalmanUpdateResult u = filter_->updateBodyVelocity(m);
+    const Vec3 v_after = filter_->state().x.q_s_b.conjugate() * filter_->state().x.v_s_b;
+    e << (u.applied ? "re-anchored" : "not re-anchored (refused by the gate)") << " " << t - *sight_back_t_
+      << " s after sight came back: the first " << aligned->frames << " images say a speed of " << m.v_b.norm()
+      << " m/s (sigma " << std::sqrt(m.cov.trace() / 3.0) << "), the filter had "
+      << v_before.norm() << " m/s, now " << v_after.norm() << " m/s (NIS " << u.nis << ", 3 dof)";
+  } else if (t - *sight_back_t_ >= params_.reanchor_max_wait_s) {
+    e << "not re-anchored " << t - *sight_back_t_ << " s after sight came back: " << why;
+  } else {
+    return;
+  }
+  endComeBack(e.str());
+}
+
+void VioPipeline::endComeBack(const std::string& event) {
+  comeback_.reset();
+  sight_back_t_.reset();
+  filter_->holdNewLandmarks(false);
+  listener_.cameBack(event, *filter_);
 }
 
 }  // namespace vi_ekf_slam

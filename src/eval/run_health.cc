@@ -98,14 +98,15 @@ std::vector<ReportColumn> healthColumns() {
 void writeTrace(const std::string& path, const std::vector<StatusSample>& samples) {
   std::ofstream f(path);
   f << "t,x,y,z,tracks,accepted,rejected,nis_per_dof,time_offset_s,time_offset_sigma_s,resets,processing_ms,"
-       "tracker_ms,landmarks,new_landmarks,deferred,removed,stationary,dormant,revisits\n"
+       "tracker_ms,landmarks,new_landmarks,deferred,removed,stationary,dormant,revisits,speed_mps,velocity_sigma_mps,"
+       "blind_s\n"
     << std::setprecision(12);
   for (const StatusSample& s : samples) {
     f << s.t << "," << s.p.x() << "," << s.p.y() << "," << s.p.z() << "," << s.tracks << "," << s.accepted << ","
       << s.rejected << "," << s.nis_per_dof << "," << s.time_offset_s << "," << s.time_offset_sigma_s << "," << s.resets
       << "," << s.processing_ms << "," << s.tracker_ms << "," << s.landmarks << "," << s.new_landmarks << ","
       << s.deferred << "," << s.removed << "," << static_cast<int>(s.stationary) << "," << s.dormant << ","
-      << s.revisits << "\n";
+      << s.revisits << "," << s.speed_mps << "," << s.velocity_sigma_mps << "," << s.blind_s << "\n";
   }
 }
 

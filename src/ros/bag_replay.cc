@@ -27,6 +27,10 @@ void RecordingSink::odometry(const nav_msgs::Odometry& o) {
   for (int i = 0; i < 6; ++i)
     for (int j = 0; j < 6; ++j) p.cov(i, j) = o.pose.covariance[static_cast<size_t>(6 * i + j)];
   poses.push_back(p);
+  Vec3 v_b;
+  tf2::fromMsg(o.twist.twist.linear, v_b);
+  speed_mps = v_b.norm();
+  velocity_sigma_mps = std::sqrt((o.twist.covariance[0] + o.twist.covariance[7] + o.twist.covariance[14]) / 3.0);
   if (processor) {
     const Eigen::Isometry3d T_w_o = processor->outputFrames().fixedFromWorld().inverse();
     if (static_cast<int>(segments.size()) <= resets) segments.resize(static_cast<size_t>(resets) + 1);
@@ -69,6 +73,9 @@ void RecordingSink::status(const vi_ekf_slam::FilterStatus& s) {
   x.dormant = s.dormant_landmarks;
   x.revisits = s.revisits;
   x.stationary = s.stationary;
+  x.speed_mps = speed_mps;
+  x.velocity_sigma_mps = velocity_sigma_mps;
+  x.blind_s = s.blind_s;
   trace.push_back(x);
 }
 

@@ -324,6 +324,11 @@ void EkfSlamProcessor::relocalized(const Relocalization& r, const std::string& e
   this->event(event);
 }
 
+void EkfSlamProcessor::cameBack(const std::string& event, EkfSlam& /*filter*/) {
+  ROS_INFO_STREAM("vi_ekf_slam: " << event);
+  this->event(event);
+}
+
 void EkfSlamProcessor::lost(const std::string& why) {
   // Nothing of a lost filter is published: start over (the pipeline re-initializes at rest or
   // moving), and say why in the events and the diagnostics.

@@ -356,6 +356,11 @@ std::vector<ParamSpec> makeTable() {
             "waits while roll/pitch would be known worse than this", false),
       field("dynamic_init_gyro_bias_sigma_radps", "initialization", VI_FIELD(p.dynamic_init.gyro_bias_sigma_radps),
             "rad/s", "initial std-dev of the gyro bias it cannot see (turn-on bias)", false),
+      field("blind_reanchor_max_wait_s", "initialization", VI_FIELD(p.reanchor_max_wait_s), "s",
+            "after a blind stretch (no usable image feature) new tracks wait until the first images' alignment with "
+            "the IMU re-anchors the velocity, at most this long after the camera sees again "
+            "(0: they enter at once)",
+            false),
       field("static_window_s", "initialization", VI_FIELD(p.static_init.window_s), "s",
             "the filter starts after this long at rest", false),
       field("static_max_accel_std_mps2", "initialization", VI_FIELD(p.static_init.max_accel_std_mps2), "m/s^2",

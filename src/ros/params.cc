@@ -75,6 +75,7 @@ PipelineParams pipelineParams(const NodeParams& p) {
   out.dynamic_init = withFilterSettings(p.dynamic_init, p.filter);
   out.max_frame_queue = p.node.max_image_queue;
   out.background_start_attempts = p.background_start_attempts;
+  out.reanchor_max_wait_s = p.reanchor_max_wait_s;
   return out;
 }
 

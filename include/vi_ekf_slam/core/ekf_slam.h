@@ -20,6 +20,7 @@
 #include "vi_ekf_slam/core/navigation_output.h"
 #include "vi_ekf_slam/core/outlier_watch.h"
 #include "vi_ekf_slam/core/types.h"
+#include "vi_ekf_slam/core/velocity_reanchor.h"
 
 namespace vi_ekf_slam {
 
@@ -107,11 +108,22 @@ class EkfSlam {
 
   /// The first image of the current blind stretch (no usable feature) [s, IMU clock]; none while the camera sees.
   std::optional<double> blindSince() const { return blind_since_; }
+  /// While held, new tracks do not become landmarks (their tracks go on and enter once released):
+  /// after a blind stretch, until the velocity is re-anchored (VioPipeline, velocity_reanchor.h).
+  void holdNewLandmarks(bool hold) { hold_new_landmarks_ = hold; }
+  bool newLandmarksHeld() const { return hold_new_landmarks_; }
+  /// Corrects the state by the body's velocity as an alignment of the last frames measured it
+  /// (bodyVelocityUpdate), gated at the update's gate probability.
+  KalmanUpdateResult updateBodyVelocity(const BodyVelocity& m) {
+    return bodyVelocityUpdate(state_, m, gateProbability());
+  }
 
  private:
   // The steps of processFrame besides its parts' (imu_, landmarks_, map_), in order.
   /// Standing (no translation parallax): the zero-velocity update.
   void detectStanding(const CameraFrame& frame, bool at_rest, FrameResult* r);
+  /// A blind stretch begins: the accelerometer bias's variance is raised to at least its prior's.
+  void knowAccelBiasAsAtStart();
   /// The latched "seen moving" that lets new tracks become landmarks.
   void updateSeenMoving(const FrameResult& r);
   bool shouldCompose(int new_landmarks) const;
@@ -140,6 +152,7 @@ class EkfSlam {
   OutlierWatch outlier_watch_;
   bool seen_moving_ = false;           ///< parallax reached moving_parallax_px since the last stand (or start)
   std::optional<double> blind_since_;  ///< the first image of the current blind stretch [s]
+  bool hold_new_landmarks_ = false;
 };
 
 }  // namespace vi_ekf_slam

@@ -32,6 +32,10 @@ struct PipelineParams {
   /// that ends before the next frame gives the same start as inline. false: inline, every frame
   /// tried in turn, reproducible (offline runs, the simulator).
   bool background_start_attempts = false;
+  /// After a blind stretch, new tracks wait until the first frames' alignment with the IMU (the
+  /// moving start's, dynamic_init) re-anchors the velocity (velocity_reanchor.h), at most this long after the camera sees again [s]; 0: they enter at
+  /// once. Not when the first frame after the stretch finds landmarks of the map again.
+  double reanchor_max_wait_s = 3.0;
 };
 
 /// A camera frame on its way to the filter: its stamp and how to get its features. The features
@@ -72,6 +76,9 @@ class PipelineListener {
   /// The filter was placed in the kept map (its world moved by r.T_m_n) before this frame's
   /// processed(); `event` says so with the figures.
   virtual void relocalized(const Relocalization& /*r*/, const std::string& /*event*/, EkfSlam& /*filter*/) {}
+  /// After a blind stretch: the velocity was re-anchored by the first frames, or not (`event` says
+  /// which, with the figures), and new tracks may become landmarks again.
+  virtual void cameBack(const std::string& /*event*/, EkfSlam& /*filter*/) {}
 };
 
 class VioPipeline {
@@ -153,6 +160,11 @@ class VioPipeline {
   void archiveRun();
   /// The filter not in the map yet: this frame's features against the map (PnP); placed on success.
   void tryRelocalize(const CameraFrame& frame);
+  /// A blind stretch and the frames after it: hold new landmarks, align the first frames after
+  /// it, correct the filter by their body velocity, release (reanchor_max_wait_s).
+  void comeBack(const CameraFrame& frame, const FrameResult& r);
+  /// Ends a come-back: new tracks may enter again; the listener hears `event`.
+  void endComeBack(const std::string& event);
 
   EkfSlamConfig config_;
   PipelineParams params_;
@@ -172,6 +184,9 @@ class VioPipeline {
     std::future<std::pair<std::optional<DynamicInitResult>, std::string>> outcome;
   };
   std::optional<StartAttempt> attempt_;  ///< background attempts: the one in flight
+  /// Since a blind stretch began until the come-back ends: the alignment of the frames after it.
+  std::unique_ptr<DynamicInitializer> comeback_;
+  std::optional<double> sight_back_t_;  ///< the first frame after the stretch [s, IMU clock]
   KeptMap map_;
   bool in_map_ = false;
   int relocalizations_ = 0;

@@ -25,6 +25,9 @@ struct StatusSample {
   int landmarks = 0, new_landmarks = 0, deferred = 0, removed = 0;
   int dormant = 0, revisits = 0;  ///< keep_map: dormant landmarks, and those observed again in this image
   bool stationary = false;
+  double speed_mps = 0.0;           ///< [m/s] the body's estimated speed
+  double velocity_sigma_mps = 0.0;  ///< [m/s] its std-dev per axis (root of the mean of the three variances)
+  double blind_s = 0.0;             ///< [s] since the first image without a usable feature; 0 while the camera sees
 };
 
 /// The health of one run: samples of every processed image (across resets), the resets, the

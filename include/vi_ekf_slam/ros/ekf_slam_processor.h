@@ -156,6 +156,7 @@ class EkfSlamProcessor : private PipelineListener {
   void lost(const std::string& why) override;
   void imuBridged(const ImuData& imu, ImuSampleVerdict why) override;
   void relocalized(const Relocalization& r, const std::string& event, EkfSlam& filter) override;
+  void cameBack(const std::string& event, EkfSlam& filter) override;
 
   NodeParams params_;
   OutputSink& sink_;

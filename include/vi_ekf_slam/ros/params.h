@@ -14,6 +14,7 @@
 #include "vi_ekf_slam/core/dynamic_init/dynamic_initializer.h"
 #include "vi_ekf_slam/core/static_initializer.h"
 #include "vi_ekf_slam/core/vio_pipeline.h"
+#include "vi_ekf_slam/core/vio_pipeline.h"
 #include "vi_ekf_slam/ros/output_frames.h"
 
 namespace vi_ekf_slam::glue {
@@ -62,6 +63,8 @@ struct NodeParams {
   StaticInitParams static_init;
   bool dynamic_init_enabled = true;  ///< also initialize while moving (visual-inertial alignment)
   DynamicInitParams dynamic_init;
+  /// After a blind stretch, new tracks wait for the re-anchor at most this long [s] (PipelineParams).
+  double reanchor_max_wait_s = PipelineParams().reanchor_max_wait_s;
   NodeOptions node;
   /// Not a parameter: the live node sets it, the offline runner does not (PipelineParams).
   bool background_start_attempts = false;
