@@ -173,6 +173,42 @@ TEST(EkfSlam, ABlindStretchIsSaidFromItsFirstImageToTheFirstWithFeatures) {
   EXPECT_EQ(f.state().numLandmarks(), 1);
 }
 
+TEST(EkfSlam, ABlindStretchKnowsTheAccelBiasAsAtTheStartAndHeldTracksWait) {
+  EkfSlamConfig cfg;
+  cfg.max_landmarks = 5;
+  EkfSlam f(cfg, sim::paperCamera(), sim::torsoCameraExtrinsics());
+  startAtRest(f, 2.0);
+  // A larger prior than the filter's bias sigma now: the blind stretch raises it to that.
+  cfg.initial.accel_bias_mps2 = 4.0 * std::sqrt(f.state().covariance()(idx::kBa, idx::kBa));
+  ASSERT_TRUE(f.setConfig(cfg));
+  CameraFrame frame;
+  frame.timestamp = 0.1;
+  frame.features = {{1, Eigen::Vector2d(100, 200)}};
+  f.processFrame(frame);
+  const Eigen::MatrixXd P_seeing = f.state().covariance();
+  frame.features.clear();
+  frame.timestamp = 0.2;
+  ASSERT_TRUE(f.processFrame(frame).blind_since);
+  const double prior = cfg.initial.accel_bias_mps2 * cfg.initial.accel_bias_mps2;
+  for (int i = idx::kBa; i < idx::kBa + 3; ++i) {
+    EXPECT_LT(P_seeing(i, i), prior);
+    EXPECT_NEAR(f.state().covariance()(i, i), prior, 1e-12);
+  }
+  // Held, new tracks do not enter (their tracks go on) and are counted; released, they enter.
+  f.holdNewLandmarks(true);
+  const int before = f.state().numLandmarks();
+  frame.features = {{7, Eigen::Vector2d(300, 200)}, {8, Eigen::Vector2d(350, 250)}};
+  frame.timestamp = 0.3;
+  FrameResult r = f.processFrame(frame);
+  EXPECT_TRUE(r.new_ids.empty());
+  EXPECT_EQ(r.deferred_features, 2);
+  EXPECT_EQ(f.state().numLandmarks(), before);
+  f.holdNewLandmarks(false);
+  frame.timestamp = 0.4;
+  r = f.processFrame(frame);
+  EXPECT_EQ(r.new_ids.size(), 2u);
+}
+
 TEST(EkfSlam, SwitchingMechanizationWhileRunningKeepsPoseAndMap) {
   const sim::Scenario sc = sim::circleScenario(4.0, true, 2);
   EkfSlamConfig cfg;

@@ -237,6 +237,10 @@ TEST(ProcessorStream, ACoveredCameraIsRiddenThrough) {
   };
   EXPECT_EQ(said("blind since"), 1);
   EXPECT_EQ(said("sight back after"), 1);
+  // No landmark was left to find again: the first images after it re-anchored the velocity.
+  EXPECT_EQ(std::count_if(r.out.events.begin(), r.out.events.end(),
+                          [](const std::string& e) { return e.rfind("re-anchored", 0) == 0; }),
+            1);
   // The tracks that start while it walks (after the stand, after the cover) wait for their
   // baseline, and status says how many.
   int max_waiting = 0;
