@@ -426,6 +426,32 @@ std::string configSets(const std::string& name, size_t index) {
   return sets.empty() ? "-" : sets;
 }
 
+/// The seconds after a covered camera over which the study averages the pose NEES.
+constexpr double kAfterOutageS = 5.0;
+
+/// Per summary: the largest, over the covered-camera faults, of the run-averaged pose NEES averaged
+/// over the kAfterOutageS after the fault ends (NaN where no frame falls there); empty without one.
+std::vector<double> neesAfterOutages(const std::vector<sim::SensorFault>& faults,
+                                     const std::vector<eval::ConsistencySummary>& sums) {
+  std::vector<double> worst;
+  for (const auto& f : faults) {
+    if (f.kind != sim::SensorFault::Kind::kCameraCovered) continue;
+    worst.resize(sums.size(), std::nan(""));
+    const double t0 = f.start_s + f.duration_s;
+    for (size_t c = 0; c < sums.size(); ++c) {
+      double sum = 0.0;
+      int n = 0;
+      for (size_t k = 0; k < sums[c].t.size(); ++k) {
+        if (sums[c].t[k] < t0 || sums[c].t[k] >= t0 + kAfterOutageS || !std::isfinite(sums[c].avg_nees_pose[k])) continue;
+        sum += sums[c].avg_nees_pose[k];
+        ++n;
+      }
+      if (n > 0 && !(worst[c] >= sum / n)) worst[c] = sum / n;
+    }
+  }
+  return worst;
+}
+
 /// --fault KIND:START_S:DURATION_S (exits with usage on a malformed one).
 std::vector<sim::SensorFault> parseFaults(const std::vector<std::string>& specs) {
   std::vector<sim::SensorFault> faults;
@@ -601,11 +627,22 @@ eval::Report summaryReport(const Options& o, const std::string& traj_name, const
                            {"revisits_per_run", s.revisits_per_run},
                            {"false_revisits", s.false_revisits}};
   }
+  // After each covered camera (sim::SensorFault::kCameraCovered), the run-averaged pose NEES over
+  // the seconds that follow it: whether the filter comes back honest. The worst outage's.
+  const std::vector<double> after = neesAfterOutages(sc.faults, sums);
+  if (!after.empty()) {
+    for (size_t c = 0; c < sums.size(); ++c) r.runs.rows[sums[c].name]["nees_pose_after_outage"] = after[c];
+    std::ostringstream n;
+    n << "NEES pose after an outage: the run average over the " << kAfterOutageS
+      << " s after each covered camera, the worst of them.";
+    r.notes.push_back(n.str());
+  }
   r.runs.columns =
       eval::metricColumns({"ate_position_m", "ate_posyaw_m", "ate_orientation_deg", "final_position_error_m",
                            "final_position_error_pct", "nees_position", "nees_orientation", "nees_pose",
                            "consistent_fraction", "revisit_error_ratio", "revisits_per_run", "false_revisits",
                            "final_scale_ratio", "filter_ms_mean", "filter_ms_p95", "real_time_factor"});
+  if (!after.empty()) r.runs.columns.push_back({"nees_pose_after_outage", "NEES pose after outage", 2});
   std::ostringstream band;
   band << "Pose NEES 95% band for the run average: [" << std::fixed << std::setprecision(2) << sums[0].pose_band.lo
        << ", " << sums[0].pose_band.hi << "] (6 dof).";

@@ -129,9 +129,11 @@ FrameResult EkfSlam::processFrame(const CameraFrame& camera_frame) {
   if (blind) {
     if (!blind_since_) {
       blind_since_ = frame.timestamp;
+      r.blind_started = true;
       knowAccelBiasAsAtStart();
     }
     r.blind_since = blind_since_;
+    r.blind_s = blindFor();
   } else if (blind_since_) {
     r.blind_ended_after_s = frame.timestamp - *blind_since_;
     blind_since_.reset();

@@ -199,7 +199,7 @@ vi_ekf_slam::FilterStatus toFilterStatus(const EkfSlam& filter, const NavState& 
   s.waiting_features = r.waiting_features;
   s.removed_landmarks = static_cast<int>(r.removed_ids.size());
   s.dormant_landmarks = r.dormant_landmarks;
-  s.blind_s = r.blind_since ? std::max(0.0, filter.state().timestamp - *r.blind_since) : 0.0;
+  s.blind_s = r.blind_s;
   s.in_map = x.in_map;
   s.map_points = x.map_points;
   s.relocalizations = x.relocalizations;

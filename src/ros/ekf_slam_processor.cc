@@ -362,11 +362,10 @@ void EkfSlamProcessor::processed(const CameraFrame& frame, const FrameResult& r,
   last_processed_t_ = img.t;
   if (frame.features.empty()) ++counters_.images_without_features;
   if (r.blind_since) {
-    const double t0 = *r.blind_since, blind_s = filter.state().timestamp - t0;
     std::ostringstream w;
-    w << std::fixed << std::setprecision(2) << "blind since t = " << t0 << " (" << blind_s
+    w << std::fixed << std::setprecision(2) << "blind since t = " << *r.blind_since << " (" << r.blind_s
       << " s): no usable feature in the image (lens covered, dark?); propagating on the IMU";
-    if (blind_s <= 0.0) event(w.str());
+    if (r.blind_started) event(w.str());
     reportProblem(w.str());
   } else if (r.blind_ended_after_s > 0.0) {
     std::ostringstream w;

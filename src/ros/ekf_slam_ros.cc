@@ -304,9 +304,9 @@ void EkfSlamRos::diagnoseFilter(diagnostic_updater::DiagnosticStatusWrapper& sta
                  processor_->lastLost().empty()
                      ? "not initialized (waiting for the camera and " + start + ")"
                      : "lost (" + processor_->lastLost() + "): reset, waiting for " + start + " to re-initialize");
-  } else if (const std::optional<double> blind = f->blindSince()) {
+  } else if (f->blindSince()) {
     std::ostringstream w;
-    w << std::fixed << std::setprecision(2) << "blind for " << f->state().timestamp - *blind
+    w << std::fixed << std::setprecision(2) << "blind for " << f->blindFor()
       << " s (no usable image feature): propagating on the IMU";
     stat.summary(DiagnosticStatus::WARN, w.str());
   } else {

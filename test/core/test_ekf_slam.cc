@@ -160,6 +160,9 @@ TEST(EkfSlam, ABlindStretchIsSaidFromItsFirstImageToTheFirstWithFeatures) {
     ASSERT_TRUE(r.blind_since);
     EXPECT_DOUBLE_EQ(*r.blind_since, 0.15);
     EXPECT_EQ(f.blindSince(), r.blind_since);
+    EXPECT_EQ(r.blind_started, t < 0.16);
+    EXPECT_NEAR(r.blind_s, t - 0.15, 1e-9);
+    EXPECT_DOUBLE_EQ(f.blindFor(), r.blind_s);
     EXPECT_DOUBLE_EQ(r.blind_ended_after_s, 0.0);
     removed += r.removed_ids.size();
   }
@@ -169,6 +172,7 @@ TEST(EkfSlam, ABlindStretchIsSaidFromItsFirstImageToTheFirstWithFeatures) {
   r = f.processFrame(frame);
   EXPECT_FALSE(r.blind_since);
   EXPECT_FALSE(f.blindSince());
+  EXPECT_EQ(f.blindFor(), 0.0);
   EXPECT_NEAR(r.blind_ended_after_s, 1.05, 1e-9);
   EXPECT_EQ(f.state().numLandmarks(), 1);
 }

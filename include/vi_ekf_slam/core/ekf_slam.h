@@ -108,6 +108,8 @@ class EkfSlam {
 
   /// The first image of the current blind stretch (no usable feature) [s, IMU clock]; none while the camera sees.
   std::optional<double> blindSince() const { return blind_since_; }
+  /// How long the current blind stretch has lasted at the state's time [s]; 0 while the camera sees.
+  double blindFor() const { return blind_since_ ? std::max(0.0, state_.timestamp - *blind_since_) : 0.0; }
   /// While held, new tracks do not become landmarks (their tracks go on and enter once released):
   /// after a blind stretch, until the velocity is re-anchored (VioPipeline, velocity_reanchor.h).
   void holdNewLandmarks(bool hold) { hold_new_landmarks_ = hold; }

@@ -40,6 +40,8 @@ struct FrameResult {
   /// A blind stretch (no usable feature in the image: a covered lens, darkness, smoke): the time
   /// of its first image [s, IMU clock]. The filter propagates on the IMU.
   std::optional<double> blind_since;
+  double blind_s = 0.0;        ///< how long the stretch has lasted at this image [s] (0 at its first and while seeing)
+  bool blind_started = false;  ///< this image is the stretch's first
   /// The first image with features after a blind stretch: how long it lasted [s] (0: none ended).
   double blind_ended_after_s = 0.0;
 };
