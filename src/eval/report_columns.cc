@@ -19,6 +19,7 @@ const std::map<std::string, ReportColumn>& table() {
              {"nees_position", "NEES pos", 2},
              {"nees_orientation", "NEES rot", 2},
              {"nees_pose", "NEES pose", 2},
+             {"nees_pose_after_outage", "NEES pose after outage", 2},
              {"consistent_fraction", "consistent", 2},
              {"final_scale_ratio", "final gamma", 3},
              {"map_error_median_m", "map err median [m]", 3},

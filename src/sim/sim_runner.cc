@@ -104,6 +104,7 @@ PipelineParams simulatedNodeStart(const Scenario& sc, const EkfSlamConfig& confi
   // The simulator's queue holds every frame the IMU has not reached (a node drops the oldest
   // beyond its bound; a simulated stream never falls that far behind).
   p.max_frame_queue = std::numeric_limits<int>::max();
+  p.reanchor_max_wait_s = sc.reanchor_max_wait_s;
   return p;
 }
 

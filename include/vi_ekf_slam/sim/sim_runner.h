@@ -69,6 +69,8 @@ struct Scenario {
   /// registered to the truth's position and yaw (what it cannot know) with an error drawn from
   /// the filter's prior, as a prior start is.
   std::optional<DynamicInitParams> dynamic_init;
+  /// After a blind stretch, new tracks wait for the re-anchor at most this long [s] (PipelineParams).
+  double reanchor_max_wait_s = PipelineParams().reanchor_max_wait_s;
   /// Such a start is registered to the truth (false: the filter keeps the initializer's own
   /// position and yaw, as the node does).
   bool register_to_truth = true;
