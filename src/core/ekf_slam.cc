@@ -134,13 +134,6 @@ FrameResult EkfSlam::processFrame(const CameraFrame& camera_frame) {
     }
     r.blind_since = blind_since_;
     r.blind_s = blindFor();
-    // Standing still is told from the IMU alone while the images cannot tell it (no parallax to
-    // measure): a rig at rest (imuAtRest: set down, or a wearer lying still) gets the zero-velocity
-    // update, which bounds the drift the IMU alone would give.
-    if (at_rest && config_.zero_velocity.enabled && !r.zero_velocity_applied) {
-      r.zero_velocity_applied = zeroVelocityUpdate(state_, config_.zero_velocity, true).applied;
-      if (r.zero_velocity_applied) ++zero_velocity_updates_;
-    }
   } else if (blind_since_) {
     r.blind_ended_after_s = frame.timestamp - *blind_since_;
     blind_since_.reset();
