@@ -163,7 +163,8 @@ Options parse(int argc, char** argv) {
       "texture-patterns", po::value(&o.texture_patterns)->default_value(o.texture_patterns),
       "N > 0: repeated texture, the landmarks' appearance repeats N patterns over the world (0: all differ)")(
       "fault", po::value(&o.faults)->composing(),
-      "KIND:START_S:DURATION_S, repeatable: a sensor fault in every run (image_dropout, imu_gap, outlier_burst, "
+      "KIND:START_S:DURATION_S, repeatable: a sensor fault in every run, START_S from the window's start "
+      "(image_dropout, imu_gap, outlier_burst, "
       "camera_covered, imu_clipped)")(
       "imu-biases", po::value(&o.imu_biases)->default_value(o.imu_biases),
       "drawn | none: the simulated IMU's biases are drawn from the filter's prior, or zero (a diagnostic: what "
@@ -433,8 +434,9 @@ std::string configSets(const std::string& name, size_t index) {
 /// The seconds after a covered camera over which the study averages the pose NEES.
 constexpr double kAfterOutageS = 5.0;
 
-/// Per summary: the largest, over the covered-camera faults, of the run-averaged pose NEES averaged
-/// over the kAfterOutageS after the fault ends (NaN where no frame falls there); empty without one.
+/// Per summary: the largest, over the covered-camera faults (times from the window's start, as
+/// --fault gives them), of the run-averaged pose NEES averaged over the kAfterOutageS after the
+/// fault ends (NaN where no frame falls there); empty without one.
 std::vector<double> neesAfterOutages(const std::vector<sim::SensorFault>& faults,
                                      const std::vector<eval::ConsistencySummary>& sums) {
   std::vector<double> worst;
@@ -446,7 +448,8 @@ std::vector<double> neesAfterOutages(const std::vector<sim::SensorFault>& faults
       double sum = 0.0;
       int n = 0;
       for (size_t k = 0; k < sums[c].t.size(); ++k) {
-        if (sums[c].t[k] < t0 || sums[c].t[k] >= t0 + kAfterOutageS || !std::isfinite(sums[c].avg_nees_pose[k])) continue;
+        const double t = sums[c].t[k] - sums[c].t.front();  // the runs start at the window's start
+        if (t < t0 || t >= t0 + kAfterOutageS || !std::isfinite(sums[c].avg_nees_pose[k])) continue;
         sum += sums[c].avg_nees_pose[k];
         ++n;
       }
@@ -538,6 +541,8 @@ std::vector<sim::Scenario> startScenarios(const Options& o, const sim::Scenario&
           o.max_duration > 0.0 ? std::min(start + o.max_duration, sc.trajectory->endTime()) : sc.trajectory->endTime();
       s.trajectory = std::make_shared<sim::TruncatedTrajectory>(sc.trajectory, start, end);
     }
+    // --fault times are from the window's start (a TUM file's clock is the recording's).
+    for (auto& f : s.faults) f.start_s += s.trajectory->startTime();
     scenarios.push_back(s);
   }
   return scenarios;
