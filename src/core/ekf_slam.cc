@@ -123,8 +123,9 @@ FrameResult EkfSlam::processFrame(const CameraFrame& camera_frame) {
   }
   // A blind stretch is not a failure: the filter propagates on the IMU and says since when. Its
   // landmarks leave as their tracks end (landmark_timeout_s), with keep_map as dormant points that
-  // stay in the map to be found again. (Holding the tracked ones through the stretch was measured
-  // worse: new points entered tied to the stale map's depth, docs/evaluation.md.)
+  // stay in the map to be found again (holding the tracked ones through the stretch tied the points
+  // entering after it to the stale map's depth). Coming back: knowAccelBiasAsAtStart, and the
+  // pipeline's re-anchor (velocity_reanchor.h) while new tracks are held.
   const bool blind = known.empty() && fresh.empty() && pending.empty();
   if (blind) {
     if (!blind_since_) {
