@@ -434,9 +434,9 @@ std::string configSets(const std::string& name, size_t index) {
 /// The seconds after a covered camera over which the study averages the pose NEES.
 constexpr double kAfterOutageS = 5.0;
 
-/// Per summary: the largest, over the covered-camera faults (times from the window's start, as
-/// --fault gives them), of the run-averaged pose NEES averaged over the kAfterOutageS after the
-/// fault ends (NaN where no frame falls there); empty without one.
+/// Per summary: the largest, over the covered-camera faults (of the run's scenario: on its clock),
+/// of the run-averaged pose NEES averaged over the kAfterOutageS after the fault ends (NaN where no
+/// frame falls there); empty without one.
 std::vector<double> neesAfterOutages(const std::vector<sim::SensorFault>& faults,
                                      const std::vector<eval::ConsistencySummary>& sums) {
   std::vector<double> worst;
@@ -448,7 +448,7 @@ std::vector<double> neesAfterOutages(const std::vector<sim::SensorFault>& faults
       double sum = 0.0;
       int n = 0;
       for (size_t k = 0; k < sums[c].t.size(); ++k) {
-        const double t = sums[c].t[k] - sums[c].t.front();  // the runs start at the window's start
+        const double t = sums[c].t[k];
         if (t < t0 || t >= t0 + kAfterOutageS || !std::isfinite(sums[c].avg_nees_pose[k])) continue;
         sum += sums[c].avg_nees_pose[k];
         ++n;
