@@ -344,8 +344,8 @@ void VioPipeline::comeBack(const CameraFrame& frame, const FrameResult& r) {
     const Vec3 v_after = filter_->state().x.q_s_b.conjugate() * filter_->state().x.v_s_b;
     e << (u.applied ? "re-anchored" : "not re-anchored (refused by the gate)") << " " << t - *sight_back_t_
       << " s after sight came back: the first " << aligned->frames << " images say a speed of " << m.v_b.norm()
-      << " m/s (sigma " << std::sqrt(m.cov.trace() / 3.0) << "), the filter had "
-      << v_before.norm() << " m/s, now " << v_after.norm() << " m/s (NIS " << u.nis << ", 3 dof)";
+      << " m/s (sigma " << std::sqrt(m.cov.trace() / 3.0) << "), the filter had " << v_before.norm() << " m/s, now "
+      << v_after.norm() << " m/s (NIS " << u.nis << ", 3 dof)";
   } else if (t - *sight_back_t_ >= params_.reanchor_max_wait_s) {
     e << "not re-anchored " << t - *sight_back_t_ << " s after sight came back: " << why;
   } else {

@@ -346,7 +346,7 @@ CameraFrame EkfSlamProcessor::trackImage(PendingImage& img, const std::optional<
   return frame;
 }
 
-void EkfSlamProcessor::processed(const CameraFrame& frame, const FrameResult& r, EkfSlam& filter) {
+void EkfSlamProcessor::processed(const CameraFrame& frame, const FrameResult& r, EkfSlam& /*filter*/) {
   last_update_ms_ = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - frame_tic_).count();
   if (!r.processed) {
     reportProblem("frame not processed: " + r.error);

@@ -33,8 +33,9 @@ struct PipelineParams {
   /// tried in turn, reproducible (offline runs, the simulator).
   bool background_start_attempts = false;
   /// After a blind stretch, new tracks wait until the first frames' alignment with the IMU (the
-  /// moving start's, dynamic_init) re-anchors the velocity (velocity_reanchor.h), at most this long after the camera sees again [s]; 0: they enter at
-  /// once. Not when the first frame after the stretch finds landmarks of the map again.
+  /// moving start's, dynamic_init) re-anchors the velocity (velocity_reanchor.h), at most this long after the camera
+  /// sees again [s]; 0: they enter at once. Not when the first frame after the stretch finds landmarks of the map
+  /// again.
   double reanchor_max_wait_s = 3.0;
 };
 

@@ -29,7 +29,7 @@ class RecordingSink : public OutputSink {
   std::vector<eval::EstimatedPose> poses;
   std::map<std::int64_t, eval::EstimatedLandmark> map;
   std::vector<Event> events;
-  std::vector<eval::StatusSample> trace;  ///< every processed image, across resets
+  std::vector<eval::StatusSample> trace;             ///< every processed image, across resets
   double speed_mps = 0.0, velocity_sigma_mps = 0.0;  ///< of the latest odometry [m/s]
   int resets = 0;
   /// If set, each pose is also kept in the filter's own world of the time (which starts over at
