@@ -6,7 +6,15 @@
 #include <sstream>
 #include <stdexcept>
 
+#include "vi_ekf_slam/core/param_ranges.h"
+
 namespace vi_ekf_slam {
+
+std::string PipelineParams::validate() const {
+  std::ostringstream err;
+  checkRange(err, "blind_reanchor_max_wait_s", reanchor_max_wait_s);
+  return err.str();
+}
 
 namespace {
 /// A moving start older than this behind the newest IMU sample is not taken: the IMU buffer no

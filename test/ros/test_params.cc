@@ -192,7 +192,8 @@ TEST(Params, EachCoreRangeIsWrittenOnceAndTheCoreRefusesValuesOutsideIt) {
       } else {
         spec.set(p, ParamValue(outside));
       }
-      const std::string err = p.filter.validate() + p.tracker.validate() + p.dynamic_init.validate();
+      const std::string err =
+          p.filter.validate() + p.tracker.validate() + p.dynamic_init.validate() + pipelineParams(p).validate();
       EXPECT_NE(err.find(spec.name), std::string::npos) << spec.name << " = " << outside << " not refused: " << err;
     }
     ++checked;

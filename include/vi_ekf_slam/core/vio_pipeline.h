@@ -37,6 +37,9 @@ struct PipelineParams {
   /// sees again [s]; 0: they enter at once. Not when the first frame after the stretch finds landmarks of the map
   /// again.
   double reanchor_max_wait_s = 3.0;
+  /// Every problem with the values above that the filter's and initializers' own validate() do not
+  /// cover, one per line ("" if none).
+  std::string validate() const;
 };
 
 /// A camera frame on its way to the filter: its stamp and how to get its features. The features
