@@ -113,7 +113,6 @@ class EkfSlam {
   /// While held, new tracks do not become landmarks (their tracks go on and enter once released):
   /// after a blind stretch, until the velocity is re-anchored (VioPipeline, velocity_reanchor.h).
   void holdNewLandmarks(bool hold) { hold_new_landmarks_ = hold; }
-  bool newLandmarksHeld() const { return hold_new_landmarks_; }
   /// Corrects the state by the body's velocity as an alignment of the last frames measured it
   /// (bodyVelocityUpdate), gated at the update's gate probability.
   KalmanUpdateResult updateBodyVelocity(const BodyVelocity& m) {

@@ -34,8 +34,8 @@ struct FrameResult {
   StationaryDetector::Decision stationary;  ///< the standing test of this frame
   bool zero_velocity_applied = false;       ///< stationary and the zero-velocity update passed its gate
   bool imu_at_rest = false;                 ///< the IMU's rest test over the still window before the frame
-  int deferred_features =
-      0;  ///< new tracks kept out of the map: rig neither seen moving nor at rest, or held (holdNewLandmarks)
+  /// New tracks kept out of the map: the rig neither seen moving nor at rest, or held (holdNewLandmarks).
+  int deferred_features = 0;
   int waiting_features = 0;  ///< new tracks waiting for the baseline that triangulates them
   std::string lost;          ///< non-empty: the filter is lost (DivergenceMonitor) and should be reset; why
   /// A blind stretch (no usable feature in the image: a covered lens, darkness, smoke): the time
