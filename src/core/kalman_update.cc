@@ -8,6 +8,23 @@
 
 namespace vi_ekf_slam {
 
+namespace {
+/// The entries 0..n-1 not in `sorted` (ascending).
+std::vector<int> complementOf(const std::vector<int>& sorted, int n) {
+  std::vector<int> out;
+  out.reserve(static_cast<size_t>(n) - sorted.size());
+  size_t k = 0;
+  for (int i = 0; i < n; ++i) {
+    if (k < sorted.size() && sorted[k] == i) {
+      ++k;
+    } else {
+      out.push_back(i);
+    }
+  }
+  return out;
+}
+}  // namespace
+
 void innovationCovariance(const Eigen::MatrixXd& P, const std::vector<MeasurementRows>& rows, Eigen::MatrixXd* PHt,
                           Eigen::MatrixXd* S) {
   int m = 0;
@@ -77,14 +94,26 @@ bool factorInnovation(const Eigen::MatrixXd& S, Eigen::LLT<Eigen::MatrixXd>* llt
 
 void optimalGainCovarianceUpdate(Eigen::MatrixXd& P, const Eigen::MatrixXd& PHt, const Eigen::LLT<Eigen::MatrixXd>& llt,
                                  const std::vector<int>& consider) {
-  // With K = [K_a; 0], (I-KH) P (I-KH)^T + K R K^T differs from P - A A^T only in the consider
-  // block, which keeps its prior (exactly: it is put back, not added back).
-  const Eigen::MatrixXd P_cc = P(consider, consider);
   // A^T = L^-1 (P H^T)^T, so A A^T = P H^T S^-1 H P.
   const Eigen::MatrixXd At = llt.matrixL().solve(PHt.transpose());
-  P.selfadjointView<Eigen::Lower>().rankUpdate(At.transpose(), -1.0);
-  P.triangularView<Eigen::StrictlyUpper>() = P.transpose();
-  P(consider, consider) = P_cc;
+  if (consider.empty()) {
+    P.selfadjointView<Eigen::Lower>().rankUpdate(At.transpose(), -1.0);
+    P.triangularView<Eigen::StrictlyUpper>() = P.transpose();
+    return;
+  }
+  // With K = [K_a; 0], (I-KH) P (I-KH)^T + K R K^T differs from P - A A^T only in the consider
+  // block, which keeps its prior: that block (the kept map's dormant points, most of the state) is
+  // never computed, only the updated entries' own block and their cross-covariance with it.
+  const std::vector<int> updated = complementOf(consider, static_cast<int>(P.rows()));
+  const Eigen::MatrixXd A_u = At(Eigen::all, updated).transpose();
+  const Eigen::MatrixXd A_c = At(Eigen::all, consider).transpose();
+  Eigen::MatrixXd P_uu = P(updated, updated);
+  P_uu.selfadjointView<Eigen::Lower>().rankUpdate(A_u, -1.0);
+  P_uu.triangularView<Eigen::StrictlyUpper>() = P_uu.transpose();
+  const Eigen::MatrixXd P_uc = P(updated, consider) - A_u * A_c.transpose();
+  P(updated, updated) = P_uu;
+  P(updated, consider) = P_uc;
+  P(consider, updated) = P_uc.transpose();
 }
 
 void zeroConsider(Eigen::VectorXd& dx, const std::vector<int>& consider) {
