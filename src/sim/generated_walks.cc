@@ -120,6 +120,9 @@ struct WalkSpec {
   std::function<double(double)> height = [](double) { return 0.0; };  ///< [m] above the start at arc length s
   std::uint64_t seed = 0;
   Path path = blockPath();
+  /// false: the body on the centreline itself, without the gait's bounce and sway (no acceleration
+  /// on a straight at a constant speed); the gait's torso angles stay.
+  bool gait_translation = true;
 };
 
 /// Samples the walk at 100 Hz: the centreline at the distance walked, its heading from the tangent
@@ -146,7 +149,9 @@ std::vector<io::StampedPose> sample(const WalkSpec& w) {
     const double h = std::atan2(tangent.y(), tangent.x());
     heading = i == 0 ? h : heading + std::remainder(h - heading, 2.0 * M_PI);  // unwrapped
     const Eigen::Vector2d xy = path.at(s);
-    poses.push_back(gait.pose(t, Vec3(xy.x(), xy.y(), 1.3 + w.height(s)), heading, v));
+    const Vec3 centre(xy.x(), xy.y(), 1.3 + w.height(s));
+    poses.push_back(gait.pose(t, centre, heading, v));
+    if (!w.gait_translation) poses.back().p = centre;
   }
   return poses;
 }
@@ -237,6 +242,12 @@ WalkSpec spec(const std::string& kind) {
     w.speed = constant(kCruiseMps);
     w.duration_s = 130.0;
     w.seed = 22;
+  } else if (kind == "steady") {  // 0.3 m/s down a straight, no bounce or sway: the scale is unobservable
+    w.path = {Eigen::Vector2d(0.0, 0.0), Eigen::Vector2d(30.0, 0.0)};
+    w.speed = constant(0.3);
+    w.gait_translation = false;
+    w.duration_s = 60.0;
+    w.seed = 16;
   } else if (kind == "run") {
     w.speed = constant(3.5);
     w.duration_s = 60.0;
@@ -252,7 +263,8 @@ WalkSpec spec(const std::string& kind) {
 std::vector<std::string> generatedWalkKinds(bool suite_only) {
   std::vector<std::string> kinds = {"slow_start", "crawl", "stops", "stairs", "fast", "stairwell"};
   if (!suite_only) {
-    for (const char* k : {"slow_walk", "start04", "stop_and_go", "small_room", "run", "there_and_back", "laps"}) {
+    for (const char* k :
+         {"slow_walk", "start04", "stop_and_go", "small_room", "run", "there_and_back", "laps", "steady"}) {
       kinds.push_back(k);
     }
   }

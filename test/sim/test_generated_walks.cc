@@ -59,6 +59,12 @@ TEST(GeneratedWalks, SpeedsStandsAndClimbsAreAsDescribed) {
   EXPECT_NEAR(heightAt(stairs, 89.0) - heightAt(stairs, 0.0), 0.0, 0.1);  // and back down
   const auto stairwell = generatedWalk("stairwell");
   EXPECT_NEAR((heightAt(stairwell, 21.0) - heightAt(stairwell, 11.0)) / 10.0, 0.24, 0.03);
+  // The steady probe does not accelerate at all (its torso turns as a walker's does).
+  const auto steady = generatedWalk("steady");
+  EXPECT_NEAR(meanSpeed(steady, 1.0, 59.0), 0.3, 1e-9);
+  for (size_t i = 1; i + 1 < steady.size(); ++i) {
+    ASSERT_LT((steady[i + 1].p - 2.0 * steady[i].p + steady[i - 1].p).norm(), 1e-9) << steady[i].t;
+  }
 }
 
 TEST(Gait, TheCadenceFollowsTheSpeedAndStandingLeavesOnlyThePosturalSway) {

@@ -12,7 +12,9 @@
 // Probes the suite does not run by default: slow_walk (0.6 m/s), start04 (0.4 m/s for 10 s),
 // stop_and_go (a 1 s stop every 7 s), small_room (1.0 m/s round a 6 m x 4 m room), run (3.5 m/s),
 // and the walks that come back to where they have been (a map's revisits): there_and_back (40 m
-// down a corridor and back), laps (twice round the block).
+// down a corridor and back), laps (twice round the block); steady (0.3 m/s for 60 s down a straight,
+// the gait's torso angles without its bounce and sway: no acceleration at all, so the scale is
+// unobservable and any information the filter gains on it is false, docs/evaluation.md#known-limits).
 #pragma once
 
 #include <string>
