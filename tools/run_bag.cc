@@ -296,10 +296,11 @@ nlohmann::ordered_json compareRun(const glue::RecordingSink& sink, const glue::I
       }
       j["window_s"] = window_s;
       j["windows"] = w;
-      j["first_window_scale_ratio"] = eval::firstWindowScaleRatio(windows);
+      const double first_ratio = eval::firstWindowScaleRatio(windows);
+      j["first_window_scale_ratio"] = first_ratio;
       std::printf(
           "    in windows of %g s, each aligned on its own: scale %s; the first over the later ones' median %.2f\n",
-          window_s, scales.c_str(), eval::firstWindowScaleRatio(windows));
+          window_s, scales.c_str(), first_ratio);
     }
     std::ofstream rc(csv);
     rc << "t,ex,ey,ez,rx,ry,rz\n" << std::setprecision(12);
