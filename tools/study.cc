@@ -90,8 +90,8 @@ struct Options {
   std::string extrinsic_error;       // DEG,M: the filter is given an extrinsic this far off the true one
   std::string map;               // "keep" | "forget": landmarks whose tracks ended stay dormant or go; "": the core's
   std::string dormant_consider;  // "yes" | "no": dormant landmarks are consider states; "": the core's
-  double reanchor_max_wait_s =
-      -1.0;                  // after a blind stretch, new tracks wait for the re-anchor [s]; < 0: the pipeline's
+  // After a blind stretch, new tracks wait for the re-anchor at most this long [s]; < 0: the pipeline's.
+  double reanchor_max_wait_s = -1.0;
   int texture_patterns = 0;  // > 0: the world's appearance repeats N patterns (repeated texture)
 };
 

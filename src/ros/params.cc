@@ -62,11 +62,15 @@ std::string deriveAndValidate(NodeParams& p) {
   if (n.calibration_source == "file" && n.camera_intrinsics.empty() && n.camera_calibration_file.empty()) {
     err << "calibration_source file needs camera_intrinsics, camera_calibration_file or kalibr_camchain\n";
   }
-  err << p.filter.validate() << p.tracker.validate() << p.dynamic_init.validate() << pipelineParams(p).validate();
+  err << coreProblems(p);
   return err.str();
 }
 
 }  // namespace
+
+std::string coreProblems(const NodeParams& p) {
+  return p.filter.validate() + p.tracker.validate() + p.dynamic_init.validate() + pipelineParams(p).validate();
+}
 
 PipelineParams pipelineParams(const NodeParams& p) {
   PipelineParams out;

@@ -192,8 +192,7 @@ TEST(Params, EachCoreRangeIsWrittenOnceAndTheCoreRefusesValuesOutsideIt) {
       } else {
         spec.set(p, ParamValue(outside));
       }
-      const std::string err =
-          p.filter.validate() + p.tracker.validate() + p.dynamic_init.validate() + pipelineParams(p).validate();
+      const std::string err = coreProblems(p);
       EXPECT_NE(err.find(spec.name), std::string::npos) << spec.name << " = " << outside << " not refused: " << err;
     }
     ++checked;

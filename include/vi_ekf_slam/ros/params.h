@@ -159,6 +159,9 @@ std::string loadParams(const ParamSource& source, NodeParams* out);
 std::string describeParams(const NodeParams& p);
 /// The start policy and queue of the core pipeline (VioPipeline) from the node's parameters.
 PipelineParams pipelineParams(const NodeParams& p);
+/// Every problem the core's own checks find in p's values (the filter's, the tracker's, the moving
+/// start's and the pipeline's validate()), one per line ("" if none).
+std::string coreProblems(const NodeParams& p);
 /// Applies a dynamic_reconfigure update; returns the problems or an empty string.
 std::string applyReconfigure(const EkfSlamReconfigureConfig& c, NodeParams* p);
 /// The dynamic_reconfigure view of the current parameters.
