@@ -88,8 +88,9 @@ struct Options {
   bool estimate_extrinsic = false;   // every configuration estimates the camera-IMU extrinsic
   bool second_order = false;         // every composition keeps the second-order term (frame_change.h)
   std::string extrinsic_error;       // DEG,M: the filter is given an extrinsic this far off the true one
-  std::string map;               // "keep" | "forget": landmarks whose tracks ended stay dormant or go; "": the core's
-  std::string dormant_consider;  // "yes" | "no": dormant landmarks are consider states; "": the core's
+  std::string map;                 // "keep" | "forget": landmarks whose tracks ended stay dormant or go; "": the core's
+  std::string dormant_consider;    // "yes" | "no": dormant landmarks are consider states; "": the core's
+  std::string blind_motion_prior;  // "on" | "off": the motion prior while blind (blind_motion_prior.h); "": the core's
   // After a blind stretch, new tracks wait for the re-anchor at most this long [s]; < 0: the pipeline's.
   double reanchor_max_wait_s = -1.0;
   int texture_patterns = 0;  // > 0: the world's appearance repeats N patterns (repeated texture)
@@ -158,6 +159,9 @@ Options parse(int argc, char** argv) {
       "dormant-consider", po::value(&o.dormant_consider),
       "yes | no: dormant landmarks are consider states (Schmidt-Kalman: no update sharpens them) or ordinary "
       "ones (every configuration; default: the core's)")(
+      "blind-motion-prior", po::value(&o.blind_motion_prior),
+      "on | off: while no image constrains the velocity, the body-frame velocity of the seconds of sight before "
+      "bounds it (every configuration; default: the core's)")(
       "reanchor-max-wait-s", po::value(&o.reanchor_max_wait_s)->default_value(o.reanchor_max_wait_s),
       "after a blind stretch new tracks wait at most this long for the first images to re-anchor the velocity "
       "(0: not; < 0: the pipeline's default) [s]")(
@@ -219,6 +223,8 @@ Options parse(int argc, char** argv) {
     usage("--landmark-entry must be triangulated or prior");
   }
   if (!o.map.empty() && o.map != "keep" && o.map != "forget") usage("--map must be keep or forget");
+  if (!o.blind_motion_prior.empty() && o.blind_motion_prior != "on" && o.blind_motion_prior != "off")
+    usage("--blind-motion-prior must be on or off");
   if (!o.dormant_consider.empty() && o.dormant_consider != "yes" && o.dormant_consider != "no") {
     usage("--dormant-consider must be yes or no");
   }
@@ -260,6 +266,7 @@ EkfSlamConfig withStudyOptions(EkfSlamConfig c, const Options& o, const sim::Sce
   if (o.second_order) c.composition_second_order = true;
   if (!o.map.empty()) c.map.within_run = o.map == "keep";
   if (!o.dormant_consider.empty()) c.map.dormant_consider = o.dormant_consider == "yes";
+  if (!o.blind_motion_prior.empty()) c.blind_motion.enabled = o.blind_motion_prior == "on";
   return c;
 }
 

@@ -46,6 +46,7 @@ void EkfSlam::forgetRun() {
   seen_moving_ = false;
   blind_since_.reset();
   hold_new_landmarks_ = false;
+  motion_prior_.reset();
 }
 
 void EkfSlam::initialize(const NavState& init) { initialize(init, config_.initial); }
@@ -158,6 +159,7 @@ FrameResult EkfSlam::processFrame(const CameraFrame& camera_frame) {
   // decided (a crawl's IMU is as quiet as a stand's, its images are not), else the IMU's.
   const bool camera_still = r.stationary.decided ? r.stationary.stationary : at_rest;
   outlier_watch_.record(r.update, seen_moving_ && !camera_still, frame.timestamp, config_.update);
+  boundBlindVelocity(&r);
   // A revisit the update's gate refused was a false match: its track is a new point from now on,
   // and the landmark stays dormant.
   std::unordered_set<std::int64_t> refused;
@@ -213,6 +215,16 @@ void EkfSlam::detectStanding(const CameraFrame& frame, bool at_rest, FrameResult
   if (r->stationary.stationary)
     r->zero_velocity_applied = zeroVelocityUpdate(state_, config_.zero_velocity, at_rest).applied;
   if (r->zero_velocity_applied) ++zero_velocity_updates_;
+}
+
+void EkfSlam::boundBlindVelocity(FrameResult* r) {
+  // Blind, or sight back with no landmark yet (new tracks held until the re-anchor): the velocity
+  // is the IMU's alone. A standing update constrained it already.
+  if (r->update.accepted > 0) {
+    motion_prior_.seen(state_, config_.blind_motion);
+  } else if (!r->zero_velocity_applied) {
+    r->motion_prior_applied = motion_prior_.applyIfUncertain(state_, config_.blind_motion).applied;
+  }
 }
 
 void EkfSlam::knowAccelBiasAsAtStart() {

@@ -105,6 +105,10 @@ std::string EkfSlamConfig::validate() const {
   checkRange(err, "zero_velocity_sigma_mps", zero_velocity.velocity_sigma_mps);
   checkRange(err, "zero_velocity_rest_sigma_mps", zero_velocity.rest_velocity_sigma_mps);
   checkRange(err, "zero_velocity_gate_probability", zero_velocity.gate_probability);
+  checkRange(err, "blind_motion_prior_window_s", blind_motion.window_s);
+  checkRange(err, "blind_motion_prior_min_seen_s", blind_motion.min_seen_s);
+  checkRange(err, "blind_motion_prior_min_sigma_mps", blind_motion.min_sigma_mps);
+  checkRange(err, "blind_motion_prior_gate_probability", blind_motion.gate_probability);
   err << divergence.validate();
   return err.str();
 }

@@ -57,6 +57,11 @@ const std::map<std::string, ParamRange>& table() {
       {"zero_velocity_still_accel_std_mps2", {0.001, 10.0}},
       {"zero_velocity_still_gyro_radps", {0.0001, 10.0}},
       {"zero_velocity_still_window_s", {0.01, 10.0}},
+      // blind [s, m/s, probability]
+      {"blind_motion_prior_window_s", {0.5, 600.0}},
+      {"blind_motion_prior_min_seen_s", {0.0, 600.0}},
+      {"blind_motion_prior_min_sigma_mps", {0.001, 10.0}},
+      {"blind_motion_prior_gate_probability", {0.5, 0.999999}},
       // IMU [m/s^2/sqrt(Hz), rad/s/sqrt(Hz), m/s^3/sqrt(Hz), rad/s^2/sqrt(Hz), m/s^2, s, count]
       {"accel_noise_density", {1e-6, 1.0}},
       {"gyro_noise_density", {1e-7, 0.1}},

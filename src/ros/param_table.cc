@@ -311,6 +311,20 @@ std::vector<ParamSpec> makeTable() {
             "m/s^2", "at rest: std-dev of each accelerometer axis below this", dyn),
       field("zero_velocity_still_gyro_radps", "standing", VI_FIELD(p.filter.zero_velocity.still_gyro_radps), "rad/s",
             "at rest: every angular rate below this", dyn),
+      // --- blind
+      field("blind_motion_prior", "blind", VI_FIELD(p.filter.blind_motion.enabled), "",
+            "while no image constrains the velocity (a covered lens, darkness), bound it by the body-frame velocity "
+            "of the seconds of sight before (a walking person's pace and way of holding the rig); off for rigs that "
+            "may speed up while blind (vehicles, drones)",
+            dyn),
+      field("blind_motion_prior_window_s", "blind", VI_FIELD(p.filter.blind_motion.window_s), "s",
+            "the seconds of sight the prior is learned from (time constant of its forgetting)", dyn),
+      field("blind_motion_prior_min_seen_s", "blind", VI_FIELD(p.filter.blind_motion.min_seen_s), "s",
+            "seconds of sight needed before the prior is used", dyn),
+      field("blind_motion_prior_min_sigma_mps", "blind", VI_FIELD(p.filter.blind_motion.min_sigma_mps), "m/s",
+            "added to the prior's std-dev on each axis: the blind seconds' pace is never known better", dyn),
+      field("blind_motion_prior_gate_probability", "blind", VI_FIELD(p.filter.blind_motion.gate_probability),
+            "probability", "chi-square gate of the prior (a body moving unlike before refuses it)", dyn),
       // --- imu
       field("accel_noise_density", "imu", VI_FIELD(p.filter.imu_noise.accel_noise_density), "m/s^2/sqrt(Hz)",
             "accelerometer white noise", dyn),
@@ -485,6 +499,7 @@ const std::vector<ParamGroup>& paramGroups() {
       {"filter", "filter"},
       {"map", "map"},
       {"standing", "standing: zero-velocity update when the camera sees no translation parallax"},
+      {"blind", "blind: what bounds the velocity while no image constrains it"},
       {"imu", "IMU: continuous-time noise densities (datasheet or Allan variance), gravity"},
       {"initialization", "initialization"},
       {"lost", "lost detection: reset and re-initialize when, over lost_window_s, ..."},

@@ -10,6 +10,7 @@
 #include <string>
 #include <vector>
 
+#include "vi_ekf_slam/core/blind_motion_prior.h"
 #include "vi_ekf_slam/core/camera_model.h"
 #include "vi_ekf_slam/core/dynamic_init/dynamic_initializer.h"
 #include "vi_ekf_slam/core/ekf_slam_config.h"
@@ -125,6 +126,8 @@ class EkfSlam {
   void detectStanding(const CameraFrame& frame, bool at_rest, FrameResult* r);
   /// A blind stretch begins: the accelerometer bias's variance is raised to at least its prior's.
   void knowAccelBiasAsAtStart();
+  /// The motion prior: learned where the images constrained the velocity, applied where none did.
+  void boundBlindVelocity(FrameResult* r);
   /// The latched "seen moving" that lets new tracks become landmarks.
   void updateSeenMoving(const FrameResult& r);
   bool shouldCompose(int new_landmarks) const;
@@ -154,6 +157,7 @@ class EkfSlam {
   bool seen_moving_ = false;           ///< parallax reached moving_parallax_px since the last stand (or start)
   std::optional<double> blind_since_;  ///< the first image of the current blind stretch [s]
   bool hold_new_landmarks_ = false;
+  BlindMotionPrior motion_prior_;  ///< the body-frame velocity of the seconds of sight, for the blind ones
 };
 
 }  // namespace vi_ekf_slam

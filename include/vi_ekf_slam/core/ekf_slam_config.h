@@ -12,6 +12,7 @@
 #include "vi_ekf_slam/core/imu_propagation.h"
 #include "vi_ekf_slam/core/landmark_initialization.h"
 #include "vi_ekf_slam/core/state_layout.h"
+#include "vi_ekf_slam/core/blind_motion_prior.h"
 #include "vi_ekf_slam/core/zero_velocity.h"
 
 namespace vi_ekf_slam {
@@ -110,6 +111,8 @@ struct EkfSlamConfig {
   int imu_buffer_max = 4000;         ///< bound on buffered IMU samples
   ImuCheckParams imu_check;          ///< samples clipped at the range or implausible: bridged
   ZeroVelocityParams zero_velocity;  ///< standing detection from parallax + zero-velocity update
+  /// While no image constrains the velocity: the body-frame velocity as the seconds of sight showed it
+  BlindMotionPriorParams blind_motion;
   InitialUncertainty initial;
   DivergenceParams divergence;  ///< when the filter counts as lost (FrameResult::lost)
 

@@ -45,6 +45,9 @@ struct FrameResult {
   bool blind_started = false;  ///< this image is the stretch's first
   /// The first image with features after a blind stretch: how long it lasted [s] (0: none ended).
   double blind_ended_after_s = 0.0;
+  /// No observation constrained the velocity at this image and the motion prior of the seconds of
+  /// sight before (blind_motion_prior.h) was applied.
+  bool motion_prior_applied = false;
 };
 
 }  // namespace vi_ekf_slam

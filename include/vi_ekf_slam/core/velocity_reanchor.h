@@ -12,26 +12,13 @@
 
 #include <Eigen/Core>
 
+#include "vi_ekf_slam/core/body_velocity.h"
 #include "vi_ekf_slam/core/dynamic_init/dynamic_initializer.h"
-#include "vi_ekf_slam/core/filter_state.h"
-#include "vi_ekf_slam/core/kalman_update.h"
 
 namespace vi_ekf_slam {
-
-/// The body's velocity as an alignment measured it, in the body frame (no yaw: the alignment's own
-/// world is not the filter's).
-struct BodyVelocity {
-  double t = 0.0;           ///< when [s, IMU clock]
-  Vec3 v_b = Vec3::Zero();  ///< the body's velocity in {b} [m/s]
-  Mat3 cov = Mat3::Zero();  ///< its covariance [m^2/s^2]
-};
 
 /// The alignment's velocity turned into its body frame, v_b = R_n_b^T v_n; the covariance carries
 /// its tilt's error into v_b (v_b = R^T Exp(-psi) v_n to first order).
 BodyVelocity bodyVelocityOf(const DynamicInitResult& aligned);
-
-/// The EKF update by m: the filter predicts R_s_b^T v_s_b; m's covariance is whitened into
-/// unit-noise rows; gated at gate_probability (3 dof; <= 0: no gate).
-KalmanUpdateResult bodyVelocityUpdate(FilterState& state, const BodyVelocity& m, double gate_probability);
 
 }  // namespace vi_ekf_slam
