@@ -40,16 +40,13 @@ TEST(BodyVelocity, TheStatesCovarianceIsTheOneTheUpdateLinearizesWith) {
   const BodyVelocity m = bodyVelocityOfState(s);
   EXPECT_LT((m.v_b - s.x.q_s_b.conjugate() * s.x.v_s_b).norm(), 1e-12);
   // d(R_s_b^T v_s_b)/d dx numerically, then H P H^T.
-  auto h = [](const FilterState& x) -> Vec3 { return x.x.q_s_b.conjugate() * x.x.v_s_b; };
-  Eigen::MatrixXd H(3, s.dim());
-  const double eps = 1e-7;
-  for (int j = 0; j < s.dim(); ++j) {
-    FilterState x = s;
-    Eigen::VectorXd dx = Eigen::VectorXd::Zero(s.dim());
-    dx(j) = eps;
-    x.boxplus(dx);
-    H.col(j) = (h(x) - h(s)) / eps;
-  }
+  const Eigen::MatrixXd H = test::numericJacobian(
+      [&](const Eigen::VectorXd& dx) -> Eigen::VectorXd {
+        FilterState x = s;
+        x.boxplus(dx);
+        return x.x.q_s_b.conjugate() * x.x.v_s_b;
+      },
+      s.dim());
   const Mat3 expected = H * s.covariance() * H.transpose();
   EXPECT_LT((m.cov - expected).cwiseAbs().maxCoeff(), 1e-5 * expected.cwiseAbs().maxCoeff());
 }
