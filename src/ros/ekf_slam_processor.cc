@@ -362,6 +362,8 @@ void EkfSlamProcessor::processed(const CameraFrame& frame, const FrameResult& r,
   last_processed_t_ = img.t;
   if (frame.features.empty()) ++counters_.images_without_features;
   if (r.blind_since) {
+    if (r.blind_started) blind_prior_updates_ = 0;
+    if (r.motion_prior_applied) ++blind_prior_updates_;
     std::ostringstream w;
     w << std::fixed << std::setprecision(2) << "blind since t = " << *r.blind_since << " (" << r.blind_s
       << " s): no usable feature in the image (lens covered, dark?); propagating on the IMU";
@@ -369,7 +371,8 @@ void EkfSlamProcessor::processed(const CameraFrame& frame, const FrameResult& r,
     reportProblem(w.str());
   } else if (r.blind_ended_after_s > 0.0) {
     std::ostringstream w;
-    w << std::fixed << std::setprecision(2) << "sight back after " << r.blind_ended_after_s << " s blind";
+    w << std::fixed << std::setprecision(2) << "sight back after " << r.blind_ended_after_s << " s blind ("
+      << blind_prior_updates_ << " motion prior updates bounded the velocity)";
     event(w.str());
   }
   const int rejected = static_cast<int>(r.update.rejected_ids.size());

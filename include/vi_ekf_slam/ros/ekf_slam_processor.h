@@ -170,6 +170,7 @@ class EkfSlamProcessor : private PipelineListener {
   Vec3 last_gyro_ = Vec3::Zero();
   double latest_imu_t_ = std::numeric_limits<double>::quiet_NaN();  ///< [s]
   std::optional<double> last_processed_t_;                          ///< stamp of the last processed image [s]
+  int blind_prior_updates_ = 0;  ///< the motion prior's updates in the current blind stretch
   InputCounters counters_;
   int last_tracks_ = 0;
   double last_update_ms_ = 0.0, last_tracker_ms_ = 0.0;
