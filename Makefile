@@ -225,7 +225,7 @@ realdata: build $(REAL_BAG)
 
 # Faults (docs/evaluation.md): faulty copies of the real hand-held recording and of the rendered
 # walk, one class at a time (clipped IMU samples, sensor gaps, a covered lens, NaN IMU samples, dim
-# images, a lossy link), each through the node's processor; one table (results/faults/faults.md).
+# images, a lossy link, darkness), each through the node's processor; one table (results/faults/faults.md).
 faults: build $(REAL_BAG) $(BAG)
 	source $(DEVEL)/setup.bash && python3 tools/fault_matrix.py --bin $(BIN) --out results/faults \
 	  --bag real=$(REAL_BAG):$(REAL)/reference/sfm_camera_poses.txt --bag rendered=$(BAG) --study \

@@ -9,7 +9,7 @@ schema of tools/report.py) and prints the table.
 With --study, also the study on the built-in walk (8 runs, the default configuration) clean and with
 each of the simulator's faults: ATE, run-averaged pose NEES and its band.
 
-A fault of one moment (a covered lens, dim images) met at one moment is one sample: it is placed at
+A fault of one moment (a covered lens, dim images, darkness) met at one moment is one sample: it is placed at
 each of --moments (fractions of the bag), one row per moment and a row with the worst of them
 (most resets, then the largest error). --sizes adds sizes of a class (covered_lens=4,6,10).
 

@@ -41,7 +41,7 @@ int main(int argc, char** argv) {
              "Writes a faulty copy of a bag: clipped_imu (a sample at the range every SIZE s), sensor_gaps (IMU gaps "
              "of SIZE s, image gaps of 6 SIZE s), covered_lens (black images for SIZE s), nan_imu (a NaN sample every "
              "SIZE s), dim_images (SIZE s of dim noisy images), lossy_link (images dropped with probability SIZE, "
-             "duplicated, late).",
+             "duplicated, late), darkness (SIZE s at 5% of the light with the sensor's noise).",
              opts);
   if (list || list_moment) {
     for (auto c : glue::allFaultClasses())

@@ -23,7 +23,8 @@ const std::vector<std::pair<FaultClass, std::string>>& names() {
   static const std::vector<std::pair<FaultClass, std::string>> n = {
       {FaultClass::kClippedImu, "clipped_imu"},   {FaultClass::kSensorGaps, "sensor_gaps"},
       {FaultClass::kCoveredLens, "covered_lens"}, {FaultClass::kNanImu, "nan_imu"},
-      {FaultClass::kDimImages, "dim_images"},     {FaultClass::kLossyLink, "lossy_link"}};
+      {FaultClass::kDimImages, "dim_images"},     {FaultClass::kLossyLink, "lossy_link"},
+      {FaultClass::kDarkness, "darkness"}};
   return n;
 }
 
@@ -54,6 +55,7 @@ std_msgs::Header headerOf(const rosbag::MessageInstance& m) {
 struct Schedule {
   std::vector<double> imu_events;  ///< clipped or NaN samples: the first sample at or after each
   std::vector<std::pair<double, double>> imu_gaps, image_gaps, black, dim;
+  double dim_light = 1.0;  ///< the share of the light the dim images keep
 };
 
 Schedule scheduleOf(const FaultPlan& p, double start, double end, std::mt19937_64& rng) {
@@ -78,7 +80,9 @@ Schedule scheduleOf(const FaultPlan& p, double start, double end, std::mt19937_6
       s.black = {at(p.at_fraction.value_or(*ownMoment(p.fault)), p.size)};
       break;
     case FaultClass::kDimImages:
+    case FaultClass::kDarkness:
       s.dim = {at(p.at_fraction.value_or(*ownMoment(p.fault)), p.size)};
+      s.dim_light = p.fault == FaultClass::kDarkness ? 0.05 : 0.2;
       break;
     case FaultClass::kLossyLink:
       break;
@@ -114,6 +118,8 @@ std::optional<double> ownMoment(FaultClass c) {
       return 0.5;  // the middle
     case FaultClass::kDimImages:
       return 0.3;
+    case FaultClass::kDarkness:
+      return 0.5;
     default:
       return std::nullopt;
   }
@@ -145,6 +151,8 @@ double defaultFaultSize(FaultClass c) {
       return 20.0;
     case FaultClass::kLossyLink:
       return 0.1;
+    case FaultClass::kDarkness:
+      return 10.0;
   }
   return 0.0;
 }
@@ -235,7 +243,7 @@ FaultCounts perturbBag(const std::string& in, const std::string& out, const Faul
       cv::Mat noise(img.size(), CV_32F);
       cv::randn(noise, 0.0, 8.0);
       cv::Mat f;
-      img.convertTo(f, CV_32F, 0.2);
+      img.convertTo(f, CV_32F, s.dim_light);
       f += noise;
       f.convertTo(img, CV_8U);  // saturating
       ++n.images_dim;

@@ -22,6 +22,7 @@
 #include "vi_ekf_slam/ros/bag_faults.h"
 
 #include <algorithm>
+#include <numeric>
 #include <array>
 #include <cmath>
 #include <cstdio>
@@ -460,6 +461,32 @@ TEST(ToolsCli, PerturbBagWritesEachFaultClassAsItsSizeSays) {
                                 "/x.bag --fault nan_imu --at 0.2");
   EXPECT_EQ(misplaced.code, 1) << misplaced.output;
   EXPECT_NE(misplaced.output.find("one moment"), std::string::npos) << misplaced.output;
+  // Darkness: a twentieth of the light and the sensor's noise for its length, at its moment.
+  vi_ekf_slam::glue::FaultPlan dark;
+  dark.fault = vi_ekf_slam::glue::FaultClass::kDarkness;
+  dark.size = 1.0;
+  const auto dark_counts = vi_ekf_slam::glue::perturbBag(dir + "/in.bag", dir + "/dark.bag", dark);
+  EXPECT_NEAR(dark_counts.images_dim, 28, 2);
+  ASSERT_EQ(dark_counts.intervals.size(), 1u);
+  double dark_mean = 0.0, clean_mean = 0.0;
+  {
+    rosbag::Bag a(dir + "/in.bag", rosbag::bagmode::Read), b(dir + "/dark.bag", rosbag::bagmode::Read);
+    auto meanAt = [&](rosbag::Bag& bag, double t) {
+      for (const rosbag::MessageInstance& m : rosbag::View(bag)) {
+        auto img = m.instantiate<sensor_msgs::Image>();
+        if (img && std::abs(m.getTime().toSec() - t) < 0.02)
+          return std::accumulate(img->data.begin(), img->data.end(), 0.0) / img->data.size();
+      }
+      return -1.0;
+    };
+    const double mid = 0.5 * (dark_counts.intervals[0].first + dark_counts.intervals[0].second);
+    clean_mean = meanAt(a, mid);
+    dark_mean = meanAt(b, mid);
+  }
+  ASSERT_GT(clean_mean, 20.0);
+  // 5% of the light plus zero-mean noise (clipped at black: a little above 5%).
+  EXPECT_GT(dark_mean, 0.03 * clean_mean);
+  EXPECT_LT(dark_mean, 0.05 * clean_mean + 4.0);
   const BagCounts nan = perturbed("nan_imu", 3.0);
   EXPECT_GE(nan.imu_nan, 2);
   const BagCounts lossy = perturbed("lossy_link", 0.2);
@@ -468,10 +495,10 @@ TEST(ToolsCli, PerturbBagWritesEachFaultClassAsItsSizeSays) {
   // The tool names its classes (the fault matrix reads them), and refuses what it does not know.
   const Outcome list = run(std::string(VI_TOOL_PERTURB_BAG) + " --list-faults");
   EXPECT_EQ(list.code, 0) << list.output;
-  EXPECT_EQ(std::count(list.output.begin(), list.output.end(), '\n'), 6) << list.output;
+  EXPECT_EQ(std::count(list.output.begin(), list.output.end(), '\n'), 7) << list.output;
   EXPECT_NE(list.output.find("lossy_link\n"), std::string::npos) << list.output;
   const Outcome moments = run(std::string(VI_TOOL_PERTURB_BAG) + " --list-moment-faults");
-  EXPECT_EQ(moments.output, "covered_lens\ndim_images\n");
+  EXPECT_EQ(moments.output, "covered_lens\ndim_images\ndarkness\n");
   const Outcome unknown =
       run(std::string(VI_TOOL_PERTURB_BAG) + " --bag " + dir + "/in.bag --out " + dir + "/x.bag --fault glove");
   EXPECT_EQ(unknown.code, 2) << unknown.output;

@@ -20,6 +20,7 @@ enum class FaultClass {
   kNanImu,       ///< an IMU sample of NaN every `size` s
   kDimImages,    ///< `size` s of dim, noisy images (a fifth of the light, noise of 8 grey levels)
   kLossyLink,    ///< each image dropped with probability `size`, duplicated with `size` / 2, late by up to 30 ms
+  kDarkness,     ///< `size` s of darkness: a twentieth of the light, the sensor's noise of 8 grey levels
 };
 
 std::optional<FaultClass> faultClassFromString(const std::string& s);
@@ -51,7 +52,8 @@ struct FaultPlan {
 /// What the copy holds that the original did not.
 struct FaultCounts {
   int imu_clipped = 0, imu_dropped = 0, imu_nan = 0;
-  int images_dropped = 0, images_black = 0, images_dim = 0, images_duplicated = 0, images_late = 0;
+  int images_dropped = 0, images_black = 0, images_dim = 0, images_duplicated = 0,
+      images_late = 0;                               ///< dim: darkness too
   std::vector<std::pair<double, double>> intervals;  ///< the faults' [start, end] in bag time [s]
 };
 
