@@ -1,5 +1,6 @@
 #include "vi_ekf_slam/core/feature_tracker.h"
 
+#include "vi_ekf_slam/core/image_noise.h"
 #include "vi_ekf_slam/core/orb_descriptors.h"
 #include "vi_ekf_slam/core/param_ranges.h"
 
@@ -21,6 +22,7 @@ std::string TrackerParams::validate() const {
   checkRange(err, "min_distance_px", min_distance_px);
   checkRange(err, "quality_level", quality_level);
   checkRange(err, "fast_threshold", fast_threshold);
+  checkRange(err, "min_corner_snr", min_corner_snr);
   checkRange(err, "klt_window_px", klt_window_px);
   if (klt_window_px % 2 == 0) err << "klt_window_px must be odd (got " << klt_window_px << ")\n";
   checkRange(err, "klt_pyramid_levels", klt_pyramid_levels);
@@ -86,7 +88,7 @@ std::vector<FeatureObservation> FeatureTracker::searchCorners(const cv::Mat& img
     cv::goodFeaturesToTrack(img(roi), pts, 6, params_.quality_level, 3.0, cv::noArray(), 3);
     for (const auto& p : pts) {
       const cv::Point2f q = p + cv::Point2f(static_cast<float>(roi.x), static_cast<float>(roi.y));
-      if (farFromAll(q)) found.push_back(q);
+      if (farFromAll(q) && aboveNoise(q)) found.push_back(q);
     }
   }
   std::vector<FeatureObservation> corners;
@@ -108,6 +110,10 @@ void FeatureTracker::reset() {
   prev_image_.release();
 }
 
+bool FeatureTracker::aboveNoise(const cv::Point2f& p) const {
+  return !signal_ || signal_->snr(p, params_.klt_window_px) >= params_.min_corner_snr;
+}
+
 cv::Point2f FeatureTracker::predict(const cv::Point2f& uv, const Eigen::Matrix3d& R_cur_prev) const {
   // Rotation-only prediction (infinite homography), through the lens model.
   Eigen::Vector2d xn;
@@ -122,6 +128,11 @@ CameraFrame FeatureTracker::track(double timestamp, const cv::Mat& img,
                                   const std::optional<Eigen::Matrix3d>& R_cur_prev) {
   CV_Assert(img.type() == CV_8UC1);
   stats_ = TrackerStats();
+  signal_.reset();
+  if (params_.min_corner_snr > 0.0) {
+    signal_.emplace(img);
+    stats_.noise_sigma = signal_->noiseSigma();
+  }
   const cv::Size win(params_.klt_window_px, params_.klt_window_px);
   std::vector<cv::Mat> pyramid;
   cv::buildOpticalFlowPyramid(img, pyramid, win, params_.klt_pyramid_levels);
@@ -151,6 +162,12 @@ CameraFrame FeatureTracker::track(double timestamp, const cv::Mat& img,
       }
       if (!st_back[i] || cv::norm(p0_back[i] - p0[i]) > params_.fb_threshold_px) {
         ++stats_.fb_rejected;
+        continue;
+      }
+      // KLT finds a best match in noise too, and noise matches itself back: a track into a dark
+      // image ends here.
+      if (!aboveNoise(q)) {
+        ++stats_.noise_rejected;
         continue;
       }
       Eigen::Vector2d a, c;
@@ -282,7 +299,7 @@ void FeatureTracker::detect(const cv::Mat& img) {
     if (mask.at<uchar>(cv::Point(k.p)) == 0) continue;
     ++considered;
     const size_t c = static_cast<size_t>(cellOf(k.p));
-    if (count[c] >= quota) continue;
+    if (count[c] >= quota || !aboveNoise(k.p)) continue;
     ++count[c];
     cv::circle(mask, k.p, radius, cv::Scalar(0), -1);
     tracks_.push_back({next_id_++, k.p, 1, {k.p}, std::nullopt, std::nullopt});

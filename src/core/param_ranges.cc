@@ -111,6 +111,7 @@ const std::map<std::string, ParamRange>& table() {
       {"min_distance_px", {1.0, 100.0}},
       {"quality_level", {0.0001, 0.5}},
       {"fast_threshold", {1, 200}},
+      {"min_corner_snr", {0.0, 100.0}},
       {"klt_window_px", {5, 51}},
       {"klt_pyramid_levels", {0, 6}},
       {"fb_threshold_px", {0.05, 10.0}},

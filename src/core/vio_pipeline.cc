@@ -321,8 +321,11 @@ void VioPipeline::process(QueuedFrame& f) {
 void VioPipeline::comeBack(const CameraFrame& frame, const FrameResult& r) {
   if (params_.reanchor_max_wait_s <= 0.0) return;
   if (r.blind_since) {
-    if (!comeback_) {
+    // Blind again before the re-anchor (a flicker of sight in the dark): the images of that sight
+    // are of the stretch, so the come-back, and its wait, start over from the next sight.
+    if (!comeback_ || sight_back_t_) {
       comeback_ = std::make_unique<DynamicInitializer>(params_.dynamic_init, filter_->camera(), filter_->extrinsics());
+      sight_back_t_.reset();
       filter_->holdNewLandmarks(true);
     }
     return;

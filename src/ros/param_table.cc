@@ -419,6 +419,10 @@ std::vector<ParamSpec> makeTable() {
             "Shi-Tomasi quality relative to the best corner", dyn),
       field("fast_threshold", "tracker", VI_FIELD(p.tracker.fast_threshold), "gray levels", "FAST intensity threshold",
             dyn),
+      field("min_corner_snr", "tracker", VI_FIELD(p.tracker.min_corner_snr), "ratio",
+            "a corner or track needs this many times the gradient the image's own noise gives over the KLT window, "
+            "at half size (noise alone reaches about 3; 5 makes images of noise, darkness, blind; 0: off)",
+            dyn),
       field("klt_window_px", "tracker", VI_FIELD(p.tracker.klt_window_px), "px", "KLT window size (odd)", dyn),
       field("klt_pyramid_levels", "tracker", VI_FIELD(p.tracker.klt_pyramid_levels), "count", "KLT pyramid levels",
             dyn),

@@ -4,7 +4,8 @@
 //   none | nan_imu | imu_repeat | image_repeat | time_jump | imu_gap | image_before_imu |
 //   encoding_cycle | encoding:<enc> | camera_info_missing | camera_info_zero |
 //   compressed (PNG CompressedImage instead of raw images) | image_dropout (no images for 2 s
-//   from t = 4 s) | camera_covered (uniform dark images for 5 s from t = 3 s) | outlier_burst (for
+//   from t = 4 s) | camera_covered (uniform dark images for 5 s from t = 3 s) | camera_dark (the
+//   same 5 s at a twentieth of the light with noise of 8 grey levels) | outlier_burst (for
 //   0.5 s from t = 4 s the images are those of 1.5 s earlier: every track is wrong, consistently)
 // The rostest node (synthetic_stream.cc) publishes them in real time; processor gtests feed them
 // straight to EkfSlamProcessor in simulated time.

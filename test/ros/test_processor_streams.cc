@@ -248,6 +248,30 @@ TEST(ProcessorStream, ACoveredCameraIsRiddenThrough) {
   EXPECT_GT(max_waiting, 0);
 }
 
+// Darkness at a high gain: images of noise over a faint scene. The corners ranked against the best
+// of each image would be measurements of nothing; the ones that stand above the image's own noise
+// are few (min_corner_snr 5), so the filter knows it is blind as under a covered lens, and comes
+// back. Without the test (the default) every dark image is full of corners and the filter never
+// says it is blind.
+TEST(ProcessorStream, DarknessIsBlindAsACoveredLensWithTheNoiseTest) {
+  NodeParams checked = testParams();
+  checked.tracker.min_corner_snr = 5.0;
+  const StreamRun r = runStream(rig("camera_dark", 10.0), checked);
+  check(r, {.max_final_error_m = 0.15});
+  EXPECT_EQ(r.counters.resets, 0);
+  EXPECT_GT(r.counters.images_without_features, 28);  // of the 140 dark images
+  double max_blind_s = 0.0;
+  for (const auto& st : r.out.statuses) max_blind_s = std::max(max_blind_s, st.blind_s);
+  EXPECT_GT(max_blind_s, 1.0);
+  EXPECT_LE(max_blind_s, 5.0);
+  EXPECT_GE(std::count_if(r.out.events.begin(), r.out.events.end(),
+                          [](const std::string& e) { return e.rfind("re-anchored", 0) == 0; }),
+            1);
+
+  const StreamRun all = runStream(rig("camera_dark", 10.0), testParams());
+  EXPECT_EQ(all.counters.images_without_features, 0);
+}
+
 TEST(ProcessorStream, ABurstOfOutlierTracksIsGatedOut) {
   const StreamRun r = runStream(rig("outlier_burst", 7.0), testParams());
   check(r, {.max_final_error_m = 0.1});

@@ -12,6 +12,7 @@
 #include <vector>
 
 #include "vi_ekf_slam/core/camera_model.h"
+#include "vi_ekf_slam/core/image_noise.h"
 #include "vi_ekf_slam/core/types.h"
 
 namespace vi_ekf_slam {
@@ -22,9 +23,16 @@ struct TrackerParams {
   int max_tracks = 100;  ///< target number of tracks
   int grid_cols = 8;     ///< new corners are spread over this grid
   int grid_rows = 6;
-  double min_distance_px = 12.0;     ///< minimum distance between corners [px]
-  double quality_level = 0.01;       ///< Shi-Tomasi quality relative to the best corner
-  int fast_threshold = 20;           ///< FAST intensity threshold [gray levels]
+  double min_distance_px = 12.0;  ///< minimum distance between corners [px]
+  double quality_level = 0.01;    ///< Shi-Tomasi quality relative to the best corner
+  int fast_threshold = 20;        ///< FAST intensity threshold [gray levels]
+  /// A corner, new or tracked, is kept only where its KLT window holds this many times the
+  /// gradient the image's own noise gives (image_noise.h) [ratio]; 0 keeps every corner. Both
+  /// detectors rank corners against each other, so without it an image of pure noise (darkness at
+  /// a high gain) is full of corners that are measurements of nothing. Off by default: 5 (noise
+  /// alone reaches about 3) makes such images blind, but costs a little where a faint scene was
+  /// still tracked (docs/evaluation.md, darkness).
+  double min_corner_snr = 0.0;
   int klt_window_px = 15;            ///< KLT window size [px]
   int klt_pyramid_levels = 3;        ///< KLT pyramid levels above the image
   double fb_threshold_px = 1.0;      ///< forward-backward error bound [px]
@@ -55,12 +63,14 @@ CameraIntrinsics trackingIntrinsics(const CameraIntrinsics& full, int max_width_
 cv::Mat toTrackingResolution(const cv::Mat& img, const CameraIntrinsics& tracking);
 
 struct TrackerStats {
-  int tracked = 0;          ///< tracks continued from the previous image
-  int lost = 0;             ///< KLT failures and tracks that left the image
-  int fb_rejected = 0;      ///< failed the forward-backward check
-  int ransac_rejected = 0;  ///< epipolar outliers
-  int detected = 0;         ///< new tracks
-  int total = 0;            ///< tracks in this image
+  int tracked = 0;           ///< tracks continued from the previous image
+  int lost = 0;              ///< KLT failures and tracks that left the image
+  int fb_rejected = 0;       ///< failed the forward-backward check
+  int noise_rejected = 0;    ///< tracks whose window in this image holds no more than noise
+  int ransac_rejected = 0;   ///< epipolar outliers
+  int detected = 0;          ///< new tracks
+  int total = 0;             ///< tracks in this image
+  double noise_sigma = 0.0;  ///< the image's noise (imageNoiseSigma) [grey levels]
 };
 
 class FeatureTracker {
@@ -93,6 +103,9 @@ class FeatureTracker {
     std::optional<Descriptor> latest_descriptor;  ///< described again every kDescribeEveryFrames
   };
   void detect(const cv::Mat& img);
+  /// The corner at p of the last tracked image stands above its noise (min_corner_snr).
+  bool aboveNoise(const cv::Point2f& p) const;
+  std::optional<CornerSignal> signal_;  ///< of the last tracked image, if min_corner_snr > 0
   /// CameraFrame::search on `img` (the last tracked image): corners in each region (within four
   /// of its standard deviations, at most 64 px away), away from the tracks, with descriptors.
   std::vector<FeatureObservation> searchCorners(const cv::Mat& img, const std::vector<SearchRegion>& regions);
