@@ -157,6 +157,15 @@ double defaultFaultSize(FaultClass c) {
   return 0.0;
 }
 
+cv::Mat dimmed(const cv::Mat& mono8, double light, double noise_sigma, cv::RNG& rng) {
+  cv::Mat noise(mono8.size(), CV_32F), f, out;
+  rng.fill(noise, cv::RNG::NORMAL, 0.0, noise_sigma);
+  mono8.convertTo(f, CV_32F, light);
+  f += noise;
+  f.convertTo(out, CV_8U);  // saturating
+  return out;
+}
+
 FaultCounts perturbBag(const std::string& in, const std::string& out, const FaultPlan& p) {
   if (!(p.size > 0.0)) throw std::runtime_error("the fault's size must be > 0");
   if (p.at_fraction) {
@@ -240,12 +249,7 @@ FaultCounts perturbBag(const std::string& in, const std::string& out, const Faul
       img.setTo(0);
       ++n.images_black;
     } else {
-      cv::Mat noise(img.size(), CV_32F);
-      cv::randn(noise, 0.0, 8.0);
-      cv::Mat f;
-      img.convertTo(f, CV_32F, s.dim_light);
-      f += noise;
-      f.convertTo(img, CV_8U);  // saturating
+      img = dimmed(img, s.dim_light, 8.0, cv::theRNG());
       ++n.images_dim;
     }
     dst.write(m.getTopic(), m.getTime(), cv_bridge::CvImage(headerOf(m), "mono8", img).toImageMsg());

@@ -9,6 +9,7 @@
 #include <tf2_eigen/tf2_eigen.h>
 
 #include "vi_ekf_slam/core/frames.h"
+#include "vi_ekf_slam/ros/bag_faults.h"
 #include "vi_ekf_slam/sim/renderer.h"
 #include "vi_ekf_slam/sim/scenarios.h"
 
@@ -134,11 +135,8 @@ RigStream makeRigStream(const RigOptions& o, double t0) {
       if (fault == "camera_covered" && t >= 3.0 && t < 8.0) frame = cv::Mat(frames[k].size(), CV_8UC1, cv::Scalar(12));
       if (fault == "camera_dark" && t >= 3.0 && t < 8.0) {
         // A twentieth of the light at a high gain: the sensor's noise (8 grey levels) over a faint scene.
-        cv::Mat noise(frames[k].size(), CV_32F), f;
-        cv::RNG(static_cast<std::uint64_t>(k) + 1).fill(noise, cv::RNG::NORMAL, 0.0, 8.0);
-        frames[k].convertTo(f, CV_32F, 0.05);
-        f += noise;
-        f.convertTo(frame, CV_8U);  // saturating
+        cv::RNG rng(static_cast<std::uint64_t>(k) + 1);
+        frame = glue::dimmed(frames[k], 0.05, 8.0, rng);
       }
       const size_t stale = static_cast<size_t>(1.5 * sc.cam.rate_hz);
       if (fault == "outlier_burst" && t >= 4.0 && t < 4.5 && k >= stale) frame = frames[k - stale];

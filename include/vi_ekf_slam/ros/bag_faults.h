@@ -5,6 +5,7 @@
 #pragma once
 
 #include <cstdint>
+#include <opencv2/core.hpp>
 #include <optional>
 #include <string>
 #include <vector>
@@ -56,6 +57,10 @@ struct FaultCounts {
       images_late = 0;                               ///< dim: darkness too
   std::vector<std::pair<double, double>> intervals;  ///< the faults' [start, end] in bag time [s]
 };
+
+/// `mono8` at `light` of its light under Gaussian noise of `noise_sigma` grey levels drawn from
+/// `rng`, saturated to 8 bits: the images of dim_images and darkness (a high gain over a faint scene).
+cv::Mat dimmed(const cv::Mat& mono8, double light, double noise_sigma, cv::RNG& rng);
 
 /// Writes `out`, a copy of `in` with the fault applied to its IMU and image topics (chosen as
 /// run_bag chooses them; raw or compressed images, written raw where their pixels change). Throws
