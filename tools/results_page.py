@@ -189,10 +189,10 @@ def faults_section(results):
             text.append("| %s | %s | %s | %s | [%.2f, %.2f] | %s |" % (
                 x["fault"], f(x["ate_position_m"]), f(x["nees_pose"], 2), f(x.get("nees_pose_after_outage"), 2),
                 x["band_lo"], x["band_hi"], f(x["consistent_fraction"], 2)))
-    faulty = [x for x in r["runs"].values() if x["fault"] != "clean" and "worst of" not in x["fault"]]
-    worst = max(faulty, key=lambda x: (x["resets"], x["error_over_clean"] or 0.0))
-    head = (max(x["resets"] for x in faulty), max(x["error_over_clean"] or 0.0 for x in faulty), len(faulty),
-            next(name for name, x in r["runs"].items() if x is worst))
+    faulty = [(name, x) for name, x in r["runs"].items() if x["fault"] != "clean" and "worst of" not in x["fault"]]
+    worst_name, _ = max(faulty, key=lambda nx: (nx[1]["resets"], nx[1]["error_over_clean"] or 0.0))
+    head = (max(x["resets"] for _, x in faulty), max(x["error_over_clean"] or 0.0 for _, x in faulty), len(faulty),
+            worst_name)
     return head, text
 
 

@@ -1,6 +1,5 @@
 #include "vi_ekf_slam/core/feature_tracker.h"
 
-#include "vi_ekf_slam/core/image_noise.h"
 #include "vi_ekf_slam/core/orb_descriptors.h"
 #include "vi_ekf_slam/core/param_ranges.h"
 
