@@ -348,15 +348,21 @@ void VioPipeline::comeBack(const CameraFrame& frame, const FrameResult& r) {
   comeback_->addFrame(f);
   std::string why;
   const std::optional<DynamicInitResult> aligned = comeback_->tryInitialize(&why);
-  if (aligned) {
+  // The alignment's state is at its last frame, a few frames before this one: its velocity is
+  // carried on the IMU to the filter's time before it is compared (velocity_reanchor.h).
+  const std::optional<alignment::Preintegrated> since =
+      aligned ? comeback_->imuBetween(aligned->state.timestamp, t, filter_->state().x.b_g) : std::nullopt;
+  if (aligned && !since) why = "the IMU does not reach this image from the alignment's last frame";
+  if (since) {
     const Vec3 v_before = filter_->state().x.q_s_b.conjugate() * filter_->state().x.v_s_b;
-    const BodyVelocity m = bodyVelocityOf(*aligned);
+    const BodyVelocity m = bodyVelocityOf(*aligned, *since, t, filter_->config().gravity_mps2);
     const KalmanUpdateResult u = filter_->updateBodyVelocity(m);
     const Vec3 v_after = filter_->state().x.q_s_b.conjugate() * filter_->state().x.v_s_b;
     e << (u.applied ? "re-anchored" : "not re-anchored (refused by the gate)") << " " << t - *sight_back_t_
       << " s after sight came back: the first " << aligned->frames << " images say a speed of " << m.v_b.norm()
-      << " m/s (sigma " << std::sqrt(m.cov.trace() / 3.0) << "), the filter had " << v_before.norm() << " m/s, now "
-      << v_after.norm() << " m/s (NIS " << u.nis << ", 3 dof)";
+      << " m/s (sigma " << std::sqrt(m.cov.trace() / 3.0) << ", carried " << t - aligned->state.timestamp
+      << " s on the IMU to this image), the filter had " << v_before.norm() << " m/s, now " << v_after.norm()
+      << " m/s (NIS " << u.nis << ", 3 dof)";
   } else if (t - *sight_back_t_ >= params_.reanchor_max_wait_s) {
     e << "not re-anchored " << t - *sight_back_t_ << " s after sight came back: " << why;
   } else {

@@ -49,6 +49,11 @@ void DynamicInitializer::reset() {
   frames_.clear();
 }
 
+std::optional<alignment::Preintegrated> DynamicInitializer::imuBetween(double t0, double t1, const Vec3& b_g) const {
+  if (imu_.empty() || !(t0 <= t1) || imu_.front().timestamp > t0 || imu_.back().timestamp < t1) return std::nullopt;
+  return alignment::preintegrate(imu_, {t0, t1}, b_g).back();
+}
+
 void DynamicInitializer::addImu(const ImuData& imu) {
   if (!isFinite(imu)) return;
   if (!imu_.empty() && imu.timestamp <= imu_.back().timestamp) return;

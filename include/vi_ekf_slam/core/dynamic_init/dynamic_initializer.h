@@ -19,6 +19,7 @@
 #include <vector>
 
 #include "vi_ekf_slam/core/camera_model.h"
+#include "vi_ekf_slam/core/dynamic_init/preintegration.h"
 #include "vi_ekf_slam/core/ekf_slam_config.h"
 #include "vi_ekf_slam/core/navigation_output.h"
 #include "vi_ekf_slam/core/types.h"
@@ -121,6 +122,9 @@ class DynamicInitializer {
   /// motion is degenerate, on those of up to max_window_s. On failure returns nothing and sets
   /// *why (what is missing or degenerate).
   std::optional<DynamicInitResult> tryInitialize(std::string* why);
+  /// The IMU from t0 to t1, preintegrated in the body frame at t0 with the gyro bias b_g taken off
+  /// (alignment::preintegrate); none unless the samples cover [t0, t1].
+  std::optional<alignment::Preintegrated> imuBetween(double t0, double t1, const Vec3& b_g) const;
   void reset();
   const DynamicInitParams& params() const { return params_; }
 
