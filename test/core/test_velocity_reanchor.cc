@@ -59,6 +59,16 @@ struct Turning {
       out.push_back({t, w_b, R(t).transpose() * (a_n - gravityInNav(g)) + b_a});
     return out;
   }
+  /// An alignment that found the truth at t, with covariance cov.
+  DynamicInitResult alignedAt(double t, const Eigen::Matrix<double, 9, 9>& cov) const {
+    DynamicInitResult a;
+    a.state.timestamp = t;
+    a.state.q_n_b = Quat(R(t));
+    a.state.v_n_b = v(t);
+    a.state.b_a = b_a;
+    a.covariance = cov;
+    return a;
+  }
 };
 }  // namespace
 
@@ -67,12 +77,7 @@ TEST(VelocityReanchor, TheAlignmentsVelocityCarriedOnTheImuIsTheBodysAtTheLaterT
   // the body's at the filter's time, not at the alignment's.
   const Turning b;
   const double t1 = 0.4, t2 = 0.52;
-  DynamicInitResult a;
-  a.state.timestamp = t1;
-  a.state.q_n_b = Quat(b.R(t1));
-  a.state.v_n_b = b.v(t1);
-  a.state.b_a = b.b_a;
-  a.covariance = 0.01 * Eigen::Matrix<double, 9, 9>::Identity();
+  const DynamicInitResult a = b.alignedAt(t1, 0.01 * Eigen::Matrix<double, 9, 9>::Identity());
   const auto pre = alignment::preintegrate(b.imu(0.3, 0.6), {t1, t2});
   const BodyVelocity m = bodyVelocityOf(a, pre.back(), t2, b.g);
   const Vec3 truth = b.R(t2).transpose() * b.v(t2);
@@ -86,12 +91,7 @@ TEST(VelocityReanchor, TheCarriedVelocitysCovarianceIsTheAlignmentsThroughANumer
   std::mt19937_64 rng(4);
   const Turning b;
   const double t1 = 0.4, t2 = 0.5;
-  DynamicInitResult a;
-  a.state.timestamp = t1;
-  a.state.q_n_b = Quat(b.R(t1));
-  a.state.v_n_b = b.v(t1);
-  a.state.b_a = b.b_a;
-  a.covariance = randomSpd(9, rng, 0.05);
+  const DynamicInitResult a = b.alignedAt(t1, randomSpd(9, rng, 0.05));
   const alignment::Preintegrated pre = alignment::preintegrate(b.imu(0.3, 0.6), {t1, t2}).back();
   const BodyVelocity m = bodyVelocityOf(a, pre, t2, b.g);
   // d v_b / d [v_n, psi, b_a] numerically, R_true = Exp(psi) R.
