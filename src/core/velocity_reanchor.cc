@@ -7,10 +7,6 @@
 
 namespace vi_ekf_slam {
 
-BodyVelocity bodyVelocityOf(const DynamicInitResult& aligned) {
-  return bodyVelocityOf(aligned, alignment::Preintegrated{}, aligned.state.timestamp, 0.0);
-}
-
 BodyVelocity bodyVelocityOf(const DynamicInitResult& aligned, const alignment::Preintegrated& imu, double t,
                             double gravity_mps2) {
   BodyVelocity m;

@@ -12,12 +12,9 @@
 using namespace vi_ekf_slam;
 
 namespace {
-Eigen::MatrixXd randomSpd(int n, std::mt19937_64& rng, double scale) {
-  std::normal_distribution<double> g(0.0, 1.0);
-  Eigen::MatrixXd A(n, n);
-  for (int i = 0; i < n; ++i)
-    for (int j = 0; j < n; ++j) A(i, j) = g(rng);
-  return scale * scale * (A * A.transpose() / n + 0.1 * Eigen::MatrixXd::Identity(n, n));
+/// The alignment's velocity at its own time (nothing carried).
+BodyVelocity atItsOwnTime(const DynamicInitResult& a) {
+  return bodyVelocityOf(a, alignment::Preintegrated{}, a.state.timestamp, 0.0);
 }
 }  // namespace
 
@@ -26,8 +23,8 @@ TEST(VelocityReanchor, TheAlignmentsBodyVelocityCarriesItsTiltErrorAsANumericalD
   DynamicInitResult a;
   a.state.q_n_b = Quat(Eigen::AngleAxisd(0.4, Vec3(0.3, -0.5, 0.8).normalized()));
   a.state.v_n_b = Vec3(0.6, -0.3, 0.1);
-  a.covariance = randomSpd(9, rng, 0.05);
-  const BodyVelocity m = bodyVelocityOf(a);
+  a.covariance = test::randomSpd(9, rng, 0.05 * 0.05);
+  const BodyVelocity m = atItsOwnTime(a);
   const Mat3 R = a.state.q_n_b.toRotationMatrix();
   EXPECT_LT((m.v_b - R.transpose() * a.state.v_n_b).norm(), 1e-12);
   // d v_b / d [v_n, psi] numerically, with R_true = Exp(psi) R.
@@ -84,14 +81,14 @@ TEST(VelocityReanchor, TheAlignmentsVelocityCarriedOnTheImuIsTheBodysAtTheLaterT
   EXPECT_DOUBLE_EQ(m.t, t2);
   EXPECT_LT((m.v_b - truth).norm(), 1e-4);
   // Not carried, it is off by what the body's velocity changed in those 0.12 s.
-  EXPECT_GT((bodyVelocityOf(a).v_b - truth).norm(), 0.1);
+  EXPECT_GT((atItsOwnTime(a).v_b - truth).norm(), 0.1);
 }
 
 TEST(VelocityReanchor, TheCarriedVelocitysCovarianceIsTheAlignmentsThroughANumericalJacobian) {
   std::mt19937_64 rng(4);
   const Turning b;
   const double t1 = 0.4, t2 = 0.5;
-  const DynamicInitResult a = b.alignedAt(t1, randomSpd(9, rng, 0.05));
+  const DynamicInitResult a = b.alignedAt(t1, test::randomSpd(9, rng, 0.05 * 0.05));
   const alignment::Preintegrated pre = alignment::preintegrate(b.imu(0.3, 0.6), {t1, t2}).back();
   const BodyVelocity m = bodyVelocityOf(a, pre, t2, b.g);
   // d v_b / d [v_n, psi, b_a] numerically, R_true = Exp(psi) R.
@@ -160,7 +157,7 @@ TEST(VelocityReanchor, TheUpdateIsTheTextbookOneWithANumericalJacobian) {
     }
     BodyVelocity m;
     m.v_b = h(before) + Vec3(0.05, -0.03, 0.02);
-    m.cov = randomSpd(3, rng, 0.05);
+    m.cov = test::randomSpd(3, rng, 0.05 * 0.05);
     const KalmanUpdateResult r = bodyVelocityUpdate(s, m, 0.0);
     ASSERT_TRUE(r.applied);
     const Mat3 S = H * P * H.transpose() + m.cov;

@@ -18,21 +18,18 @@
 
 namespace vi_ekf_slam {
 
-/// The alignment's velocity turned into its body frame, v_b = R_n_b^T v_n, at its state's time (its
-/// last frame); the covariance carries its tilt's error into v_b (v_b = R^T Exp(-psi) v_n to first
-/// order).
-BodyVelocity bodyVelocityOf(const DynamicInitResult& aligned);
-
-/// The same velocity carried on the IMU from the alignment's last frame to a later time t, where
-/// the filter is: the alignment only takes frames the IMU covers beyond its time offset search, so
-/// its state lags the newest image by a few frames (0.1 s at 28 Hz), and in that time a walker's
-/// vertical velocity swings by as much as the alignment's sigma (the gait's bounce). `imu`: the IMU
-/// from aligned.state.timestamp to t in the alignment's last body frame {b1} (R = R_b1_b, beta the
-/// velocity increment of the raw specific force, B its dependence on the accelerometer bias;
-/// alignment::preintegrate), with gravity g_n = gravityInNav(gravity_mps2) in the alignment's {n}:
-/// v_n(t) = v_n + g_n dt + R_n_b1 (beta + B b_a), R_n_b(t) = R_n_b1 R. Its covariance is the
-/// alignment's, through the Jacobian of v_b(t) in its velocity, tilt and accelerometer bias (the
-/// IMU's own noise over the fraction of a second is left out: 1e-3 of the alignment's sigma).
+/// The alignment's velocity turned into its body frame, v_b = R_n_b^T v_n, and carried on the IMU
+/// from the alignment's last frame to a later time t, where the filter is: the alignment only takes
+/// frames the IMU covers beyond its time offset search, so its state lags the newest image by a few
+/// frames (0.1 s at 28 Hz), and in that time a walker's vertical velocity swings by as much as the
+/// alignment's sigma (the gait's bounce). `imu`: the IMU from aligned.state.timestamp to t in the
+/// alignment's last body frame {b1} (R = R_b1_b, beta the velocity increment of the raw specific
+/// force, B its dependence on the accelerometer bias; alignment::preintegrate; an empty one with
+/// t = aligned.state.timestamp for the velocity at the alignment's own time), with gravity
+/// g_n = gravityInNav(gravity_mps2) in the alignment's {n}: v_n(t) = v_n + g_n dt + R_n_b1 (beta +
+/// B b_a), R_n_b(t) = R_n_b1 R. Its covariance is the alignment's, through the Jacobian of v_b(t) in
+/// its velocity, tilt and accelerometer bias (v_b = R^T Exp(-psi) v_n to first order; the IMU's own
+/// noise over the fraction of a second is left out: 1e-3 of the alignment's sigma).
 BodyVelocity bodyVelocityOf(const DynamicInitResult& aligned, const alignment::Preintegrated& imu, double t,
                             double gravity_mps2);
 
