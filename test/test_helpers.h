@@ -29,6 +29,17 @@ inline CameraModel paperCamera(DistortionModel model = DistortionModel::kRadTan)
   return CameraModel(in);
 }
 
+/// A distortion-free camera of width x height px, focal length f [px], its principal point centred.
+inline CameraModel pinholeCamera(int width, int height, double f) {
+  CameraIntrinsics in;
+  in.width = width;
+  in.height = height;
+  in.fx = in.fy = f;
+  in.cx = 0.5 * width;
+  in.cy = 0.5 * height;
+  return CameraModel(in);
+}
+
 inline CameraExtrinsics forwardCamera() { return sim::torsoCameraExtrinsics(); }
 
 inline Eigen::MatrixXd randomSpd(int n, std::mt19937_64& rng, double scale = 1.0) {

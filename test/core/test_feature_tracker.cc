@@ -13,6 +13,7 @@
 #include <opencv2/imgproc.hpp>
 #include <set>
 
+#include "test_helpers.h"
 #include "vi_ekf_slam/core/feature_tracker.h"
 #include "vi_ekf_slam/core/orb_descriptors.h"
 #include "vi_ekf_slam/core/so3.h"
@@ -22,16 +23,6 @@
 
 namespace vi_ekf_slam {
 namespace {
-
-CameraModel pinhole() {
-  CameraIntrinsics in;
-  in.width = 640;
-  in.height = 480;
-  in.fx = in.fy = 400.0;
-  in.cx = 320.0;
-  in.cy = 240.0;
-  return CameraModel(in);
-}
 
 /// Blurred noise: corners everywhere, smooth enough for KLT. amplitude scales the contrast.
 cv::Mat texture(int width, int height, double amplitude, unsigned seed) {
@@ -57,7 +48,7 @@ cv::Point2d rotatePixel(const cv::Matx33d& H, const Eigen::Vector2d& uv) {
 }
 
 TEST(FeatureTracker, GyroPredictionLetsKltFollowALargeRotation) {
-  const CameraModel cam = pinhole();
+  const CameraModel cam = test::pinholeCamera(640, 480, 400.0);
   TrackerParams p;
   p.max_tracks = 100;
   FeatureTracker tracker(cam, p);
@@ -116,7 +107,7 @@ TEST(FeatureTracker, GyroPredictionLetsKltFollowALargeRotation) {
 }
 
 TEST(FeatureTracker, NewCornersFillTheGridWithSpacingAndBorder) {
-  const CameraModel cam = pinhole();
+  const CameraModel cam = test::pinholeCamera(640, 480, 400.0);
   TrackerParams p;
   p.max_tracks = 96;  // 2 per cell of the 8 x 6 grid
   FeatureTracker tracker(cam, p);
@@ -147,7 +138,7 @@ TEST(FeatureTracker, WeakTextureBelowTheQualityFloorGetsNoCorners) {
   // A strongly textured 160 x 160 patch (2 x 2 grid cells) in an image whose rest carries the
   // same pattern at 1/50 of the contrast: corner responses there are ~1/2500 of the best, below
   // quality_level = 0.01 of it, so the empty cells stay empty although they are below quota.
-  const CameraModel cam = pinhole();
+  const CameraModel cam = test::pinholeCamera(640, 480, 400.0);
   TrackerParams p;
   p.max_tracks = 96;
   cv::Mat img = texture(cam.width(), cam.height(), 4.0, 3);
@@ -196,7 +187,7 @@ int shiftLosing(const CameraFrame& f, int border_px, size_t lost_min, size_t los
 }
 
 TEST(FeatureTracker, RedetectFractionDefersTheSearchUntilEnoughTracksAreLost) {
-  const CameraModel cam = pinhole();
+  const CameraModel cam = test::pinholeCamera(640, 480, 400.0);
   TrackerParams p;
   p.max_tracks = 40;
   p.redetect_fraction = 0.9;  // search again below 36 tracks
@@ -232,7 +223,7 @@ TEST(FeatureTracker, RedetectFractionDefersTheSearchUntilEnoughTracksAreLost) {
 }
 
 TEST(FeatureTracker, ImagesOfAnotherSizeOrWithoutTextureRestartTracking) {
-  const CameraModel cam = pinhole();
+  const CameraModel cam = test::pinholeCamera(640, 480, 400.0);
   TrackerParams p;
   p.max_tracks = 60;
   FeatureTracker tracker(cam, p);

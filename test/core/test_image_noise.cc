@@ -5,6 +5,7 @@
 
 #include <opencv2/imgproc.hpp>
 
+#include "test_helpers.h"
 #include "vi_ekf_slam/core/feature_tracker.h"
 #include "vi_ekf_slam/core/image_noise.h"
 
@@ -78,13 +79,7 @@ TEST(ImageNoise, AFaintCornerUnderTheSameNoiseStandsOut) {
 }
 
 TEST(ImageNoise, ATrackerFindsNoCornerInNoiseAndKeepsTheFaintScenes) {
-  CameraIntrinsics in;
-  in.width = 800;
-  in.height = 450;
-  in.fx = in.fy = 400.0;
-  in.cx = 400.0;
-  in.cy = 225.0;
-  const CameraModel cam(in);
+  const CameraModel cam = test::pinholeCamera(800, 450, 400.0);
   const cv::Mat flat(450, 800, CV_8UC1, cv::Scalar(20));
   TrackerParams checked;
   checked.min_corner_snr = kMinCornerSnr;
