@@ -51,10 +51,12 @@ def study_rows(bin_dir, out):
     return rows
 
 
-def run(bin_dir, bag, ref, out):
-    """run_bag over BAG into OUT; (health row, error [m]) of the default mechanization."""
+def run(bin_dir, bag, ref, out, params=()):
+    """run_bag over BAG into OUT (with PARAMS, name=value); (health row, error [m]) of the default mechanization."""
     cmd = [os.path.join(bin_dir, "vi_ekf_slam_run_bag"), "--bag", bag, "--out", out, "--mechanization", MECH,
            "--no-plots"]
+    for p in params:
+        cmd += ["--param", p]
     if ref:
         cmd += ["--reference", ref, "--reference-frame", "camera", "--reference-clock", "camera"]
     proc = subprocess.run(cmd, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
@@ -82,6 +84,8 @@ def main():
     ap.add_argument("--sizes", action="append", default=[],
                     help="CLASS=S,S,...: also these sizes of a class (its default size is always run)")
     ap.add_argument("--study", action="store_true", help="also the study with the simulator's faults")
+    ap.add_argument("--param", action="append", default=[],
+                    help="NAME=VALUE: a node parameter for every run of the bags (run_bag --param)")
     a = ap.parse_args()
     tool = os.path.join(a.bin, "vi_ekf_slam_perturb_bag")
 
@@ -109,7 +113,7 @@ def main():
     for spec in a.bag:
         name, _, rest = spec.partition("=")
         bag, _, ref = rest.partition(":")
-        clean_health, clean_error = run(a.bin, bag, ref, os.path.join(a.out, name, "clean"))
+        clean_health, clean_error = run(a.bin, bag, ref, os.path.join(a.out, name, "clean"), a.param)
         for label, fault, size, moment in [("clean", "clean", None, None)] + cases:
             if fault == "clean":
                 health, error = clean_health, clean_error
@@ -120,7 +124,7 @@ def main():
                 cmd += ["--size", str(size)] if size is not None else []
                 cmd += ["--at", str(moment)] if moment is not None else []
                 subprocess.run(cmd, check=True, stdout=subprocess.DEVNULL)
-                health, error = run(a.bin, faulty, ref, os.path.join(a.out, name, folder))
+                health, error = run(a.bin, faulty, ref, os.path.join(a.out, name, folder), a.param)
                 if not a.keep_bags:
                     os.remove(faulty)
             inputs = health.get("inputs", {})
@@ -148,7 +152,8 @@ def main():
                                                    "%.3f" % worst["error_m"] if worst["error_m"] is not None else "-"))
     tables = {"study": study_rows(a.bin, a.out)} if a.study else None
     r = report.report("faults", "Faults: one class at a time through the node's processor (%s)" % MECH,
-                      {"mechanization": MECH, "classes": ",".join(classes)}, rows, tables)
+                      {"mechanization": MECH, "classes": ",".join(classes), "params": " ".join(a.param) or "defaults"},
+                      rows, tables)
     text = report.write_report(a.out, "faults", r, columns=[
         ("resets", "resets", 0), ("output_s", "output [s]", 1), ("input_s", "input [s]", 1),
         ("error_m", "error [m]", 3), ("error_over_clean", "x clean", 2), ("imu_bridged", "IMU bridged", 0),
