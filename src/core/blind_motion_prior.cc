@@ -1,9 +1,10 @@
 #include "vi_ekf_slam/core/blind_motion_prior.h"
 
-#include <Eigen/Cholesky>
 #include <Eigen/Eigenvalues>
 #include <cmath>
 #include <vector>
+
+#include "vi_ekf_slam/core/kalman_update.h"
 
 namespace vi_ekf_slam {
 
@@ -53,12 +54,15 @@ KalmanUpdateResult BlindMotionPrior::applyIfUncertain(FilterState& state, const 
   if (!m) return {};
   const std::optional<MeasurementRows> whitened = whitenedBodyVelocityRows(state, *m);
   if (!whitened) return {};
-  // The state's body-frame velocity covariance whitened by the prior's (L^-1 S L^-T): its eigenvectors with eigenvalues
-  // above kApplyRatio are the directions along which the IMU knows the velocity worse than the prior. Only they are
-  // measured: along the others the prior would pull an estimate the state knows better towards
-  // its zero mean (a walker's forward pace), and its error there is the same at every image.
-  const Mat3 L_inv = Eigen::LLT<Mat3>(m->cov).matrixL().solve(Mat3::Identity());
-  const Eigen::SelfAdjointEigenSolver<Mat3> eig(Mat3(L_inv * bodyVelocityOfState(state).cov * L_inv.transpose()));
+  // The state's body-frame velocity covariance whitened by the prior's (L^-1 H P H^T L^-T: the
+  // whitened rows' innovation covariance less their unit noise): its eigenvectors with eigenvalues
+  // above kApplyRatio are the directions along which the IMU knows the velocity worse than the
+  // prior. Only they are measured: along the others the prior would pull an estimate the state
+  // knows better towards its zero mean (a walker's forward pace), and its error there is the same
+  // at every image.
+  Eigen::MatrixXd PHt, S;
+  innovationCovariance(state.covariance(), {*whitened}, &PHt, &S);
+  const Eigen::SelfAdjointEigenSolver<Mat3> eig(Mat3(S - Mat3::Identity()));
   std::vector<int> along;
   for (int i = 0; i < 3; ++i)
     if (eig.eigenvalues()(i) > kApplyRatio) along.push_back(i);

@@ -2,6 +2,7 @@
 
 #include <Eigen/Cholesky>
 
+#include "vi_ekf_slam/core/matrix_utils.h"
 #include "vi_ekf_slam/core/so3.h"
 
 namespace vi_ekf_slam {
@@ -21,11 +22,7 @@ BodyVelocity bodyVelocityOfState(const FilterState& state) {
   m.t = state.timestamp;
   m.v_b = state.x.q_s_b.conjugate() * state.x.v_s_b;
   const Eigen::Matrix<double, 3, 6> H = bodyVelocityJacobian(state);
-  const auto P = state.motionCovariance();
-  Eigen::Matrix<double, 6, 6> P_vpsi;
-  P_vpsi << P.block<3, 3>(idx::kV, idx::kV), P.block<3, 3>(idx::kV, idx::kPsi), P.block<3, 3>(idx::kPsi, idx::kV),
-      P.block<3, 3>(idx::kPsi, idx::kPsi);
-  m.cov = H * P_vpsi * H.transpose();
+  m.cov = H * gatherBlocks(state.covariance(), {idx::kV, idx::kPsi}) * H.transpose();
   return m;
 }
 

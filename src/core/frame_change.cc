@@ -190,13 +190,10 @@ Mat3 compositionSecondOrderTerm(const FilterState& s, const FrameChangeJacobian&
   const double rho = lm.l.z();
   const double k = P(c + 2, c + 2) / (rho * rho);
   if (!std::isfinite(k)) return Mat3::Zero();
-  Eigen::Matrix<double, 6, 6> P_pose;
-  P_pose << P.block<3, 3>(J.pos_col, J.pos_col), P.block<3, 3>(J.pos_col, J.rot_col),
-      P.block<3, 3>(J.rot_col, J.pos_col), P.block<3, 3>(J.rot_col, J.rot_col);
   Eigen::Matrix<double, 3, 6> DA;
   DA << J.A_pos[static_cast<size_t>(i)], J.A_rot[static_cast<size_t>(i)];
   DA.row(2) *= 2.0;  // rho's row goes with rho^2
-  return k * DA * P_pose * DA.transpose();
+  return k * DA * gatherBlocks(P, {J.pos_col, J.rot_col}) * DA.transpose();
 }
 
 void compose(FilterState& s, bool second_order) {
