@@ -31,13 +31,7 @@ inline CameraModel paperCamera(DistortionModel model = DistortionModel::kRadTan)
 
 /// A distortion-free camera of width x height px, focal length f [px], its principal point centred.
 inline CameraModel pinholeCamera(int width, int height, double f) {
-  CameraIntrinsics in;
-  in.width = width;
-  in.height = height;
-  in.fx = in.fy = f;
-  in.cx = 0.5 * width;
-  in.cy = 0.5 * height;
-  return CameraModel(in);
+  return CameraModel(pinholeIntrinsics(width, height, f));
 }
 
 inline CameraExtrinsics forwardCamera() { return sim::torsoCameraExtrinsics(); }

@@ -7,6 +7,16 @@
 
 namespace vi_ekf_slam {
 
+CameraIntrinsics pinholeIntrinsics(int width, int height, double f_px) {
+  CameraIntrinsics in;
+  in.width = width;
+  in.height = height;
+  in.fx = in.fy = f_px;
+  in.cx = 0.5 * width;
+  in.cy = 0.5 * height;
+  return in;
+}
+
 std::string CameraIntrinsics::validate() const {
   std::ostringstream err;
   const double v[] = {fx, fy, cx, cy};

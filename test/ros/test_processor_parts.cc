@@ -2,10 +2,10 @@
 // rate) and the calibration source (what is missing, when a camera_info changes the calibration).
 #include <gtest/gtest.h>
 
+#include "vi_ekf_slam/core/camera_model.h"
 #include "vi_ekf_slam/ros/calibration_source.h"
 #include "vi_ekf_slam/ros/conversions.h"
 #include "vi_ekf_slam/ros/input_clock.h"
-#include "small_camera.h"
 
 namespace vi_ekf_slam::glue {
 
@@ -37,7 +37,7 @@ TEST(CalibrationSource, SaysWhatIsMissingAndWhenTheCalibrationChanges) {
   NodeOptions o;
   CalibrationSource cal(o);
   EXPECT_NE(cal.ready("cam0", "imu0", nullptr).find("no valid camera_info"), std::string::npos);
-  CameraIntrinsics in = smallCamera();
+  CameraIntrinsics in = pinholeIntrinsics(64, 48, 50.0);
   std_msgs::Header h;
   h.frame_id = "cam0";
   sensor_msgs::CameraInfo zero = toCameraInfo(in, h);

@@ -13,6 +13,7 @@
 #include <fstream>
 
 #include "synthetic_rig.h"
+#include "vi_ekf_slam/core/camera_model.h"
 #include "vi_ekf_slam/io/datasets.h"
 #include "vi_ekf_slam/ros/bag_replay.h"
 #include "vi_ekf_slam/ros/calibration_source.h"
@@ -171,16 +172,6 @@ TEST(KalibrImport, ReplacesTheConfigurationsValues) {
   EXPECT_EQ(p.node.calibration_source, "camera_info");  // still the user's choice
 }
 
-CameraIntrinsics someIntrinsics(double fx) {
-  CameraIntrinsics k;
-  k.width = 640;
-  k.height = 480;
-  k.fx = k.fy = fx;
-  k.cx = 320;
-  k.cy = 240;
-  return k;
-}
-
 // calibration_source file: a differing camera_info is said once and never used; camera_info: the
 // driver's calibration replaces the file's.
 TEST(CalibrationSource, TheChosenSourceWins) {
@@ -190,8 +181,8 @@ TEST(CalibrationSource, TheChosenSourceWins) {
   o.extrinsic_source = "parameters";
   std_msgs::Header h;
   h.frame_id = "camera";
-  const sensor_msgs::CameraInfo factory = toCameraInfo(someIntrinsics(480.0), h);
-  const sensor_msgs::CameraInfo same = toCameraInfo(someIntrinsics(500.0), h);
+  const sensor_msgs::CameraInfo factory = toCameraInfo(pinholeIntrinsics(640, 480, 480.0), h);
+  const sensor_msgs::CameraInfo same = toCameraInfo(pinholeIntrinsics(640, 480, 500.0), h);
 
   o.calibration_source = "file";
   CalibrationSource file(o);

@@ -22,6 +22,10 @@ struct CameraIntrinsics {
   std::string validate() const;
 };
 
+/// A distortion-free camera of width x height px with focal length f_px [px] and its principal
+/// point at the image's centre.
+CameraIntrinsics pinholeIntrinsics(int width, int height, double f_px);
+
 class CameraModel {
  public:
   CameraModel() = default;
