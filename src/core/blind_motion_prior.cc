@@ -5,6 +5,7 @@
 #include <vector>
 
 #include "vi_ekf_slam/core/kalman_update.h"
+#include "vi_ekf_slam/core/matrix_utils.h"
 
 namespace vi_ekf_slam {
 
@@ -54,15 +55,18 @@ KalmanUpdateResult BlindMotionPrior::applyIfUncertain(FilterState& state, const 
   if (!m) return {};
   const std::optional<MeasurementRows> whitened = whitenedBodyVelocityRows(state, *m);
   if (!whitened) return {};
-  // The state's body-frame velocity covariance whitened by the prior's (L^-1 H P H^T L^-T: the
-  // whitened rows' innovation covariance less their unit noise): its eigenvectors with eigenvalues
-  // above kApplyRatio are the directions along which the IMU knows the velocity worse than the
-  // prior. Only they are measured: along the others the prior would pull an estimate the state
-  // knows better towards its zero mean (a walker's forward pace), and its error there is the same
-  // at every image.
-  Eigen::MatrixXd PHt, S;
-  innovationCovariance(state.covariance(), {*whitened}, &PHt, &S);
-  const Eigen::SelfAdjointEigenSolver<Mat3> eig(Mat3(S - Mat3::Identity()));
+  // The state's body-frame velocity covariance whitened by the prior's, L^-1 H P H^T L^-T with the
+  // whitened rows' own Jacobian blocks (velocity and tilt: W = L^-1 H) over those two blocks of P:
+  // its eigenvectors with eigenvalues above kApplyRatio are the directions along which the IMU
+  // knows the velocity worse than the prior. Only they are measured: along the others the prior
+  // would pull an estimate the state knows better towards its zero mean (a walker's forward pace),
+  // and its error there is the same at every image.
+  const JacobianBlock& wv = whitened->blocks[0];
+  const JacobianBlock& wpsi = whitened->blocks[1];
+  Eigen::Matrix<double, 3, 6> W;
+  W << wv.H, wpsi.H;
+  const Eigen::SelfAdjointEigenSolver<Mat3> eig(
+      Mat3(W * gatherBlocks(state.covariance(), {wv.col, wpsi.col}) * W.transpose()));
   std::vector<int> along;
   for (int i = 0; i < 3; ++i)
     if (eig.eigenvalues()(i) > kApplyRatio) along.push_back(i);
